@@ -1,0 +1,36 @@
+#!/usr/bin/env bash
+# Installs Ferro's Debian 12 build and run dependencies that are missing.
+# Idempotent: installs nothing when everything is present. As root it runs apt-get;
+# otherwise it prints the exact apt-get line to run and exits 1.
+set -euo pipefail
+
+PACKAGES=(
+  build-essential cmake
+  libeigen3-dev libtbb-dev libboost-iostreams-dev libopenvdb-dev
+  libcgal-dev libassimp-dev libtomlplusplus-dev libcli11-dev catch2
+  povray
+)
+
+missing=()
+for p in "${PACKAGES[@]}"; do
+  if ! dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q "install ok installed"; then
+    missing+=("$p")
+  fi
+done
+
+if [ ${#missing[@]} -eq 0 ]; then
+  echo "install-deps: all ${#PACKAGES[@]} packages present"
+  exit 0
+fi
+
+cmd="apt-get install -y --no-install-recommends ${missing[*]}"
+if [ "$(id -u)" -ne 0 ]; then
+  echo "install-deps: missing packages; run as root:" >&2
+  echo "  apt-get update && $cmd" >&2
+  exit 1
+fi
+echo "install-deps: installing ${missing[*]}"
+export DEBIAN_FRONTEND=noninteractive
+apt-get update -qq
+# shellcheck disable=SC2086
+apt-get install -y -qq --no-install-recommends ${missing[*]}

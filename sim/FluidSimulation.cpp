@@ -1,0 +1,728 @@
+#include "sim/FluidSimulation.hpp"
+
+#include "sim/SceneFile.hpp"
+
+#include <tbb/blocked_range.h>
+#include <tbb/parallel_for.h>
+#include <tbb/parallel_reduce.h>
+
+#include <algorithm>
+#include <atomic>
+#include <cmath>
+#include <sstream>
+
+namespace ferro {
+
+namespace {
+
+constexpr size_t kGrain = 256;
+
+/// Weight of Akinci's cohesion term against the curvature term. Akinci's cohesion is
+/// gamma m_j C(r), which is not dimensionally consistent with the curvature term; with
+/// V_j C(r) (dimensionless) in its place, 1000 restores the balance Akinci and
+/// SPlisHSPlasH tuned for water in SI units.
+constexpr Real kCohesionWeight = 1000;
+
+template <class F>
+void forEachParticle(size_t n, F&& f) {
+    tbb::parallel_for(tbb::blocked_range<size_t>(0, n, kGrain), [&](const tbb::blocked_range<size_t>& r) {
+        for (size_t i = r.begin(); i != r.end(); ++i) f(i);
+    });
+}
+
+/// Sum over particles whose result does not depend on the thread count or scheduling:
+/// fixed blocks, each summed in order, blocks combined in order.
+template <class F>
+double deterministicSum(size_t n, F&& f) {
+    return tbb::parallel_deterministic_reduce(
+        tbb::blocked_range<size_t>(0, n, 1024), 0.0,
+        [&](const tbb::blocked_range<size_t>& r, double acc) {
+            for (size_t i = r.begin(); i != r.end(); ++i) acc += f(i);
+            return acc;
+        },
+        [](double a, double b) { return a + b; });
+}
+
+template <class T>
+void permute(std::vector<T>& data, const std::vector<uint32_t>& order) {
+    if (data.size() != order.size()) return;
+    std::vector<T> tmp(data.size());
+    forEachParticle(order.size(), [&](size_t k) { tmp[k] = data[order[k]]; });
+    data.swap(tmp);
+}
+
+std::string fmtVec(const Vec3d& p) {
+    std::ostringstream s;
+    s.precision(5);
+    s << "(" << p.x() << ", " << p.y() << ", " << p.z() << ")";
+    return s.str();
+}
+
+/// Lattice points of a block at spacing s, offset s/2 from its faces.
+void latticeOfBlock(const FluidBlock& b, double s, std::vector<Vec3d>& out) {
+    out.clear();
+    Vec3d lo, hi;
+    if (b.shape == FluidBlock::Shape::Box) {
+        lo = b.min;
+        hi = b.max;
+    } else {
+        lo = b.center - Vec3d(b.radius, b.radius, 0);
+        hi = b.center + Vec3d(b.radius, b.radius, b.height);
+    }
+    int n[3];
+    for (int a = 0; a < 3; ++a) n[a] = std::max(0, int(std::floor((hi[a] - lo[a]) / s + 1e-9)));
+    // Centre the lattice in the block so the leftover gap is split on both sides.
+    Vec3d start;
+    for (int a = 0; a < 3; ++a) start[a] = 0.5 * (lo[a] + hi[a]) - 0.5 * (n[a] - 1) * s;
+    const double r2 = (b.radius - 0.5 * s) * (b.radius - 0.5 * s);
+    for (int k = 0; k < n[2]; ++k)
+        for (int j = 0; j < n[1]; ++j)
+            for (int i = 0; i < n[0]; ++i) {
+                const Vec3d p = start + s * Vec3d(i, j, k);
+                if (b.shape == FluidBlock::Shape::Cylinder) {
+                    const double dx = p.x() - b.center.x(), dy = p.y() - b.center.y();
+                    if (dx * dx + dy * dy > r2) continue;
+                }
+                out.push_back(p);
+            }
+}
+
+double blockVolume(const FluidBlock& b) {
+    if (b.shape == FluidBlock::Shape::Box) return (b.max - b.min).prod();
+    return kPi * b.radius * b.radius * b.height;
+}
+
+} // namespace
+
+namespace {
+
+/// Appends to `out` the indices j in [begin, end) with |x_j - p|^2 < h2, skipping `self`.
+/// Positions come as separate coordinate arrays so the distance test vectorizes, and the
+/// append is branchless (write always, advance on a hit): the test is unpredictable, and
+/// mispredicted branches used to dominate the search.
+inline uint32_t gatherRange(const Real* px, const Real* py, const Real* pz, uint32_t begin, uint32_t end,
+                            const Vec3& p, Real h2, uint32_t self, uint32_t* out, uint32_t count) {
+    for (uint32_t j = begin; j < end; ++j) {
+        const Real dx = px[j] - p.x(), dy = py[j] - p.y(), dz = pz[j] - p.z();
+        out[count] = j;
+        count += uint32_t((dx * dx + dy * dy + dz * dz < h2) & (j != self));
+    }
+    return count;
+}
+
+/// Neighbours of `p` among the points of `grid` (coordinates px/py/pz), into `out`, which
+/// must hold `room` entries. Returns the count, or room + 1 if they did not fit.
+inline uint32_t gatherNeighbors(const SortedGrid& grid, const Real* px, const Real* py, const Real* pz,
+                                const Vec3& p, Real h2, uint32_t self, uint32_t* out, uint32_t room) {
+    int c[3];
+    grid.geometry().cellOf(p, c);
+    uint32_t count = 0;
+    for (int dz = -1; dz <= 1; ++dz)
+        for (int dy = -1; dy <= 1; ++dy) {
+            uint32_t beg, end;
+            grid.rowRange(c[0], c[1] + dy, c[2] + dz, beg, end);
+            if (count + (end - beg) > room) return room + 1;
+            count = gatherRange(px, py, pz, beg, end, p, h2, self, out, count);
+        }
+    return count;
+}
+
+void splitCoordinates(const std::vector<Vec3>& x, std::vector<Real>& px, std::vector<Real>& py,
+                      std::vector<Real>& pz) {
+    px.resize(x.size());
+    py.resize(x.size());
+    pz.resize(x.size());
+    for (size_t i = 0; i < x.size(); ++i) {
+        px[i] = x[i].x();
+        py[i] = x[i].y();
+        pz[i] = x[i].z();
+    }
+}
+
+} // namespace
+
+FluidSeed seedFluid(const SimScene& scene, const Container& container) {
+    FluidSeed seed;
+    const auto& blocks = scene.fluid.blocks;
+    seed.spacing = scene.fluid.spacing;
+    std::vector<Vec3d> pts;
+    if (seed.spacing <= 0) {
+        // Derive the spacing from the first block with a count: the largest spacing
+        // whose lattice still holds that many particles (found by bisection).
+        const FluidBlock* first = nullptr;
+        for (const auto& b : blocks)
+            if (b.count > 0) { first = &b; break; }
+        if (!first) throw SceneError(scene.path + ": fluid.spacing: set a spacing or a block count");
+        const double guess = std::cbrt(blockVolume(*first) / double(first->count));
+        double lo = 0.5 * guess, hi = 1.5 * guess;
+        for (int it = 0; it < 60; ++it) {
+            const double mid = 0.5 * (lo + hi);
+            latticeOfBlock(*first, mid, pts);
+            (long(pts.size()) >= first->count ? lo : hi) = mid;
+        }
+        seed.spacing = lo;
+    }
+    const double s = seed.spacing;
+    for (size_t bi = 0; bi < blocks.size(); ++bi) {
+        const FluidBlock& b = blocks[bi];
+        const std::string key = "fluid.block[" + std::to_string(bi) + "]";
+        latticeOfBlock(b, s, pts);
+        if (b.count > 0) {
+            if (long(pts.size()) < b.count)
+                throw SceneError(b.where + ": " + key + ".count: the block holds only " +
+                                 std::to_string(pts.size()) + " particles at spacing " +
+                                 std::to_string(s) + " m (asked " + std::to_string(b.count) + ")");
+            // Keep the lowest particles: the trimmed layer is the free surface.
+            std::stable_sort(pts.begin(), pts.end(), [](const Vec3d& a, const Vec3d& c) { return a.z() < c.z(); });
+            pts.resize(size_t(b.count));
+        }
+        if (pts.empty())
+            throw SceneError(b.where + ": " + key + ": block is smaller than one particle spacing");
+        for (const Vec3d& p : pts) {
+            if (!container.contains(p, 0.25 * s))
+                throw SceneError(b.where + ": " + key + ": fluid outside the container (particle at " +
+                                 fmtVec(p) + ")");
+            seed.positions.push_back(p.cast<Real>());
+            seed.velocities.push_back(b.velocity.cast<Real>());
+        }
+    }
+    if (seed.positions.size() >= (size_t(1) << 32) - 1) throw SceneError(scene.path + ": too many particles");
+    return seed;
+}
+
+FluidSimulation::FluidSimulation(const SimScene& scene)
+    : scene_(scene), container_(makeContainer(scene.container, scene.path)) {
+    FluidSeed seed = seedFluid(scene_, *container_);
+    spacing_ = seed.spacing;
+    h_ = 2 * spacing_;
+    kernel_ = CubicSplineKernel(Real(h_));
+    cohesion_ = CohesionKernel(Real(h_));
+    rho0_ = scene_.fluid.restDensity;
+
+    // Particle volume: the inverse kernel sum of a full cubic lattice, so that a particle
+    // inside the initial block sits exactly at rest density (no start-up jolt).
+    double lattice = 0;
+    for (int k = -2; k <= 2; ++k)
+        for (int j = -2; j <= 2; ++j)
+            for (int i = -2; i <= 2; ++i)
+                lattice += kernel_.W(Real(spacing_ * std::sqrt(double(i * i + j * j + k * k))));
+    volume_ = 1.0 / lattice;
+    mass_ = rho0_ * volume_;
+
+    x_ = std::move(seed.positions);
+    v_ = std::move(seed.velocities);
+    const size_t n = x_.size();
+    id_.resize(n);
+    for (size_t i = 0; i < n; ++i) id_[i] = uint32_t(i);
+    a_.assign(n, Vec3::Zero());
+    rho_.assign(n, Real(rho0_));
+    p_.assign(n, 0);
+    alpha_.assign(n, 0);
+    kappa_.assign(n, 0);
+    kappaV_.assign(n, 0);
+
+    // Boundary particles and their Akinci volumes V_b = 1 / sum_k W_bk.
+    bx_ = container_->sampleWalls(spacing_, 0.5 * spacing_);
+    {
+        std::vector<uint32_t> tie(bx_.size()), order;
+        for (size_t i = 0; i < tie.size(); ++i) tie[i] = uint32_t(i);
+        bGrid_.sort(bx_, tie, Real(h_), order);
+        std::vector<Vec3> sorted(bx_.size());
+        for (size_t k = 0; k < order.size(); ++k) sorted[k] = bx_[order[k]];
+        bx_.swap(sorted);
+        bGrid_.index(bx_, bGrid_.geometry());
+        splitCoordinates(bx_, bpx_, bpy_, bpz_);
+    }
+    // Akinci's volume 1 / sum_k W_bk adapts to how densely a wall is sampled. Scaled by
+    // V * P0 (P0: the kernel sum of a square lattice plane at this spacing), a flat wall
+    // sampled at the fluid spacing gets exactly the fluid particle volume V: the wall layer
+    // then stands in for the mirror image of the first fluid layer, and fluid half a
+    // spacing from the wall is at rest density.
+    double plane = 0;
+    for (int j = -2; j <= 2; ++j)
+        for (int i = -2; i <= 2; ++i) plane += kernel_.W(Real(spacing_ * std::sqrt(double(i * i + j * j))));
+    const Real wallScale = Real(volume_ * plane);
+    bVolume_.assign(bx_.size(), 0);
+    const Real h2 = Real(h_ * h_);
+    forEachParticle(bx_.size(), [&](size_t b) {
+        int c[3];
+        bGrid_.geometry().cellOf(bx_[b], c);
+        Real sum = 0;
+        for (int dz = -1; dz <= 1; ++dz)
+            for (int dy = -1; dy <= 1; ++dy) {
+                uint32_t beg, end;
+                bGrid_.rowRange(c[0], c[1] + dy, c[2] + dz, beg, end);
+                for (uint32_t k = beg; k < end; ++k) {
+                    const Real r2 = (bx_[b] - bx_[k]).squaredNorm();
+                    if (r2 < h2) sum += kernel_.W(std::sqrt(r2));
+                }
+            }
+        bVolume_[b] = wallScale / sum;
+    });
+
+    // Speed of sound for WCSPH: ten times the fastest expected flow speed keeps the
+    // density error near 1 % (Monaghan). The speed is the free-fall speed over the fluid's
+    // height above the container floor, or the initial speed, or the capillary speed.
+    const Vec3d g = scene_.solver.gravity;
+    const double gNorm = g.norm();
+    double vExpected = std::sqrt(std::max(0.0, scene_.fluid.surfaceTension) / (rho0_ * spacing_));
+    if (gNorm > 0) {
+        const Vec3d down = g / gNorm;
+        Vec3d lo, hi;
+        container_->bounds(lo, hi);
+        double top = -1e300, bottom = 1e300;
+        for (const Vec3& p : x_) {
+            top = std::max(top, -p.cast<double>().dot(down));
+            bottom = std::min(bottom, -p.cast<double>().dot(down));
+        }
+        if (scene_.container.type != ContainerParams::Type::None) {
+            // The lowest corner of the container along gravity.
+            for (int c = 0; c < 8; ++c) {
+                const Vec3d corner((c & 1) ? hi.x() : lo.x(), (c & 2) ? hi.y() : lo.y(), (c & 4) ? hi.z() : lo.z());
+                bottom = std::min(bottom, std::max(-corner.dot(down), bottom - 10 * (top - bottom)));
+            }
+        }
+        vExpected = std::max(vExpected, std::sqrt(2 * gNorm * std::max(top - bottom, spacing_)));
+    }
+    for (const Vec3& v : v_) vExpected = std::max(vExpected, double(v.norm()));
+    soundSpeed_ = scene_.solver.soundSpeed > 0 ? scene_.solver.soundSpeed : 10 * std::max(vExpected, 0.1);
+    viscosity_ = scene_.fluid.viscosity + scene_.solver.artificialViscosity * h_ * std::max(vExpected, 0.01);
+
+    // Surface tension (Akinci 2013): the coefficient gamma [m/s^2] of its cohesion and
+    // curvature terms scales as sigma / (rho0 s^2); kSurfaceTensionCalibration is fixed so
+    // a droplet's Laplace pressure matches 2 sigma / R (see tests/test_surface_tension.cpp).
+    constexpr double kSurfaceTensionCalibration = 1.0;
+    gamma_ = kSurfaceTensionCalibration * scene_.fluid.surfaceTension / (rho0_ * spacing_ * spacing_);
+    // Capillary wave time step limit (Brackbill et al. 1992).
+    if (scene_.fluid.surfaceTension > 0)
+        capillaryDt_ = std::sqrt(rho0_ * spacing_ * spacing_ * spacing_ / (2 * kPi * scene_.fluid.surfaceTension));
+
+    sortAndSearch();
+}
+
+FluidSimulation::~FluidSimulation() = default;
+
+void FluidSimulation::sortAndSearch() {
+    const size_t n = x_.size();
+    grid_.sort(x_, id_, Real(h_), order_);
+    permute(x_, order_);
+    permute(v_, order_);
+    permute(id_, order_);
+    permute(kappaV_, order_);
+    permute(p_, order_);
+    grid_.index(x_, grid_.geometry());
+    splitCoordinates(x_, px_, py_, pz_);
+
+    const Real h2 = Real(h_ * h_);
+    const bool haveBoundary = !bx_.empty();
+
+    // Pass 1: fluid and boundary neighbours into fixed-capacity scratch lists. The
+    // candidate buffer is generous (every candidate is written before it is tested);
+    // only the neighbours found are kept, and the capacity grows if one overflows.
+    std::vector<uint32_t> fluidCount(n), boundaryCount(n);
+    constexpr uint32_t kRoom = 4096;
+    for (;;) {
+        scratch_.resize(n * capacity_);
+        bScratch_.resize(n * bCapacity_);
+        std::atomic<bool> overflow{false};
+        tbb::parallel_for(tbb::blocked_range<size_t>(0, n, kGrain), [&](const tbb::blocked_range<size_t>& r) {
+            std::vector<uint32_t> buffer(kRoom + 1);
+            for (size_t i = r.begin(); i != r.end(); ++i) {
+                uint32_t cnt = gatherNeighbors(grid_, px_.data(), py_.data(), pz_.data(), x_[i], h2, uint32_t(i),
+                                               buffer.data(), kRoom);
+                if (cnt > capacity_) overflow = true;
+                std::copy_n(buffer.data(), std::min<uint32_t>(cnt, uint32_t(capacity_)), &scratch_[i * capacity_]);
+                fluidCount[i] = cnt;
+                cnt = 0;
+                if (haveBoundary) {
+                    cnt = gatherNeighbors(bGrid_, bpx_.data(), bpy_.data(), bpz_.data(), x_[i], h2, uint32_t(-1),
+                                          buffer.data(), kRoom);
+                    if (cnt > bCapacity_) overflow = true;
+                    std::copy_n(buffer.data(), std::min<uint32_t>(cnt, uint32_t(bCapacity_)), &bScratch_[i * bCapacity_]);
+                }
+                boundaryCount[i] = cnt;
+            }
+        });
+        if (!overflow) break;
+        // Grow to the largest count seen (a few extra for the next steps).
+        for (size_t i = 0; i < n; ++i) {
+            if (fluidCount[i] > capacity_) capacity_ = std::min<size_t>(fluidCount[i] + 16, kRoom);
+            if (boundaryCount[i] > bCapacity_) bCapacity_ = std::min<size_t>(boundaryCount[i] + 16, kRoom);
+        }
+    }
+    auto prefix = [&](const std::vector<uint32_t>& count, NeighborLists& lists) {
+        lists.offset.resize(n + 1);
+        lists.offset[0] = 0;
+        for (size_t i = 0; i < n; ++i) lists.offset[i + 1] = lists.offset[i] + count[i];
+        const size_t pairs = lists.offset[n];
+        lists.index.resize(pairs);
+        lists.gradW.resize(pairs);
+        lists.W.resize(pairs);
+    };
+    prefix(fluidCount, fluidNbr_);
+    prefix(boundaryCount, boundaryNbr_);
+
+    // Pass 2: compact, store W and grad W per pair, and sum the density.
+    rho_.resize(n);
+    const Real V = Real(volume_);
+    forEachParticle(n, [&](size_t i) {
+        const Vec3 xi = x_[i];
+        Real sumW = kernel_.W0();
+        const uint32_t o = fluidNbr_.offset[i], cnt = fluidNbr_.offset[i + 1] - o;
+        const uint32_t* in = &scratch_[i * capacity_];
+        for (uint32_t k = 0; k < cnt; ++k) {
+            const uint32_t j = in[k];
+            const Vec3 d = xi - x_[j];
+            const Real r = d.norm();
+            fluidNbr_.index[o + k] = j;
+            fluidNbr_.W[o + k] = kernel_.W(r);
+            fluidNbr_.gradW[o + k] = kernel_.gradW(d, r);
+            sumW += fluidNbr_.W[o + k];
+        }
+        Real density = V * sumW;
+        const uint32_t ob = boundaryNbr_.offset[i], bcnt = boundaryNbr_.offset[i + 1] - ob;
+        const uint32_t* bin = &bScratch_[i * bCapacity_];
+        for (uint32_t k = 0; k < bcnt; ++k) {
+            const uint32_t b = bin[k];
+            const Vec3 d = xi - bx_[b];
+            const Real r = d.norm();
+            boundaryNbr_.index[ob + k] = b;
+            boundaryNbr_.W[ob + k] = kernel_.W(r);
+            boundaryNbr_.gradW[ob + k] = kernel_.gradW(d, r);
+            density += bVolume_[b] * boundaryNbr_.W[ob + k];
+        }
+        rho_[i] = Real(rho0_) * density;
+    });
+    stats_.neighborPairs = fluidNbr_.pairs();
+}
+
+void FluidSimulation::updateDensities() { sortAndSearch(); }
+
+void FluidSimulation::computeFactors() {
+    // alpha_i = 1 / (|sum_j V grad W_ij + sum_b V_b grad W_ib|^2 + sum_j |V grad W_ij|^2)
+    const Real V = Real(volume_);
+    alpha_.resize(x_.size());
+    forEachParticle(x_.size(), [&](size_t i) {
+        Vec3 sum = Vec3::Zero();
+        Real sum2 = 0;
+        for (uint32_t k = fluidNbr_.offset[i]; k < fluidNbr_.offset[i + 1]; ++k) {
+            const Vec3 g = V * fluidNbr_.gradW[k];
+            sum += g;
+            sum2 += g.squaredNorm();
+        }
+        for (uint32_t k = boundaryNbr_.offset[i]; k < boundaryNbr_.offset[i + 1]; ++k)
+            sum += bVolume_[boundaryNbr_.index[k]] * boundaryNbr_.gradW[k];
+        const Real denom = sum.squaredNorm() + sum2;
+        alpha_[i] = denom > Real(1e-6) * Real(1 / (h_ * h_)) ? 1 / denom : 0;
+    });
+}
+
+double FluidSimulation::chooseTimeStep(double dtLimit) const {
+    const size_t n = x_.size();
+    const Real vmax = tbb::parallel_reduce(
+        tbb::blocked_range<size_t>(0, n, 4096), Real(0),
+        [&](const tbb::blocked_range<size_t>& r, Real m) {
+            for (size_t i = r.begin(); i != r.end(); ++i) m = std::max(m, v_[i].squaredNorm());
+            return m;
+        },
+        [](Real a, Real b) { return std::max(a, b); });
+    const double speed = std::sqrt(double(vmax));
+    const SolverParams& sp = scene_.solver;
+    double dt = sp.maxDt;
+    if (sp.kind == SolverParams::Kind::WCSPH) dt = std::min(dt, sp.cfl * spacing_ / (soundSpeed_ + speed));
+    else if (speed > 0) dt = std::min(dt, sp.cfl * spacing_ / speed);
+    dt = std::min(dt, capillaryDt_);
+    if (viscosity_ > 0) dt = std::min(dt, 0.125 * h_ * h_ / viscosity_);
+    if (dt < sp.minDt) {
+        std::ostringstream msg;
+        msg << "time step " << dt << " s fell below sim.min_dt = " << sp.minDt << " s at t = " << time_
+            << " s (max speed " << speed << " m/s): the simulation is unstable";
+        throw SimulationError(msg.str());
+    }
+    // Land exactly on the limit (a frame time) without leaving a sliver of a step.
+    if (dt >= dtLimit) return dtLimit;
+    if (2 * dt > dtLimit) return 0.5 * dtLimit;
+    return dt;
+}
+
+void FluidSimulation::nonPressureAccelerations(double dt) {
+    const size_t n = x_.size();
+    const Vec3 g = scene_.solver.gravity.cast<Real>();
+    const Real V = Real(volume_);
+    const Real rho0 = Real(rho0_);
+    const Real nu = Real(viscosity_);
+    const Real nuWall = Real(scene_.fluid.viscosity * scene_.container.wallFriction);
+    const Real eps2 = Real(0.01 * h_ * h_);
+    const bool tension = gamma_ > 0;
+    if (tension) {
+        // Akinci 2013 surface normals n_i = h sum_j (m / rho_j) grad W_ij.
+        normal_.resize(n);
+        forEachParticle(n, [&](size_t i) {
+            Vec3 sum = Vec3::Zero();
+            for (uint32_t k = fluidNbr_.offset[i]; k < fluidNbr_.offset[i + 1]; ++k)
+                sum += (rho0 / rho_[fluidNbr_.index[k]]) * fluidNbr_.gradW[k];
+            normal_[i] = Real(h_) * V * sum;
+        });
+    }
+    const Real gamma = Real(gamma_);
+    forEachParticle(n, [&](size_t i) {
+        Vec3 acc = g;
+        const Vec3 xi = x_[i], vi = v_[i];
+        for (uint32_t k = fluidNbr_.offset[i]; k < fluidNbr_.offset[i + 1]; ++k) {
+            const uint32_t j = fluidNbr_.index[k];
+            const Vec3 xij = xi - x_[j];
+            const Vec3 vij = vi - v_[j];
+            // Viscosity: the SPH Laplacian of Monaghan / SPlisHSPlasH, with the pair volume
+            // m / rho_ij at the mean density so that it is symmetric in i and j and the
+            // pair forces cancel exactly (momentum is conserved).
+            const Real Vij = 2 * V * rho0 / (rho_[i] + rho_[j]);
+            if (nu > 0) acc += (10 * nu * Vij * vij.dot(xij) / (xij.squaredNorm() + eps2)) * fluidNbr_.gradW[k];
+            if (tension) {
+                // Cohesion pulls neighbours to about one spacing, curvature flattens the
+                // surface; K_ij boosts the force where a particle lacks neighbours.
+                const Real r = xij.norm();
+                const Real Kij = 2 * rho0 / (rho_[i] + rho_[j]);
+                Vec3 f = -(normal_[i] - normal_[j]);
+                if (r > Real(1e-9) * Real(h_)) f -= (kCohesionWeight * V * cohesion_.C(r) / r) * xij;
+                acc += gamma * Kij * f;
+            }
+        }
+        if (nuWall > 0) {
+            for (uint32_t k = boundaryNbr_.offset[i]; k < boundaryNbr_.offset[i + 1]; ++k) {
+                const Vec3 xib = xi - bx_[boundaryNbr_.index[k]];
+                const Real Vb = bVolume_[boundaryNbr_.index[k]] * rho0 / rho_[i];
+                acc += (10 * nuWall * Vb * vi.dot(xib) / (xib.squaredNorm() + eps2)) * boundaryNbr_.gradW[k];
+            }
+        }
+        a_[i] = acc;
+    });
+}
+
+void FluidSimulation::stepWCSPH(double dt) {
+    const size_t n = x_.size();
+    // Tait equation of state, negative pressures clamped (no tensile instability at the
+    // free surface).
+    const double B = rho0_ * soundSpeed_ * soundSpeed_ / 7;
+    forEachParticle(n, [&](size_t i) {
+        const double ratio = double(rho_[i]) / rho0_;
+        const double r2 = ratio * ratio, r4 = r2 * r2;
+        p_[i] = Real(std::max(0.0, B * (r4 * r2 * ratio - 1)));
+    });
+    nonPressureAccelerations(dt);
+    const Real m = Real(mass_), rho0 = Real(rho0_);
+    forEachParticle(n, [&](size_t i) {
+        const Real pi = p_[i] / (rho_[i] * rho_[i]);
+        Vec3 acc = Vec3::Zero();
+        for (uint32_t k = fluidNbr_.offset[i]; k < fluidNbr_.offset[i + 1]; ++k) {
+            const uint32_t j = fluidNbr_.index[k];
+            acc -= (m * (pi + p_[j] / (rho_[j] * rho_[j]))) * fluidNbr_.gradW[k];
+        }
+        // Akinci 2012: the boundary mirrors the particle's own pressure.
+        for (uint32_t k = boundaryNbr_.offset[i]; k < boundaryNbr_.offset[i + 1]; ++k)
+            acc -= (rho0 * bVolume_[boundaryNbr_.index[k]] * pi) * boundaryNbr_.gradW[k];
+        v_[i] += Real(dt) * (a_[i] + acc);
+    });
+    stats_.pressureIterations = 0;
+    stats_.divergenceIterations = 0;
+    stats_.densityError = deterministicSum(n, [&](size_t i) { return std::max(0.0, double(rho_[i]) / rho0_ - 1); }) /
+                          double(std::max<size_t>(n, 1));
+}
+
+void FluidSimulation::pressureAccelerations(const std::vector<Real>& kappa) {
+    // a_i = -sum_j V (kappa_i + kappa_j) grad W_ij - sum_b V_b kappa_i grad W_ib, where
+    // kappa = p / rho^2 in units normalized by rho0 (Bender & Koschier 2017).
+    const Real V = Real(volume_);
+    forEachParticle(x_.size(), [&](size_t i) {
+        const Real ki = kappa[i];
+        Vec3 acc = Vec3::Zero();
+        for (uint32_t k = fluidNbr_.offset[i]; k < fluidNbr_.offset[i + 1]; ++k)
+            acc -= (V * (ki + kappa[fluidNbr_.index[k]])) * fluidNbr_.gradW[k];
+        if (ki != 0)
+            for (uint32_t k = boundaryNbr_.offset[i]; k < boundaryNbr_.offset[i + 1]; ++k)
+                acc -= (bVolume_[boundaryNbr_.index[k]] * ki) * boundaryNbr_.gradW[k];
+        a_[i] = acc;
+    });
+}
+
+int FluidSimulation::relaxedJacobi(std::vector<Real>& kappa, const std::vector<Real>& source, double hPow,
+                                   double eta, int minIterations, bool densitySolve) {
+    // Relaxed Jacobi on the pressure Poisson system of DFSPH (SPlisHSPlasH's form):
+    // kappa_i <- max(kappa_i - 0.5 (s_i - (A kappa)_i) alpha_i / hPow, 0), where
+    // (A kappa)_i = hPow * sum_j V (a_i - a_j) . grad W_ij is the density change the
+    // pressure accelerations cause. Stops when the mean residual is below eta.
+    const size_t n = x_.size();
+    const Real V = Real(volume_);
+    const Real hp = Real(hPow), invHp = Real(1 / hPow);
+    std::vector<Real>& residual = div_;
+    residual.resize(n);
+    int it = 0;
+    double err = 0;
+    for (; it < scene_.solver.maxIterations; ++it) {
+        pressureAccelerations(kappa);
+        forEachParticle(n, [&](size_t i) {
+            const Vec3 ai = a_[i];
+            Real Ap = 0;
+            for (uint32_t k = fluidNbr_.offset[i]; k < fluidNbr_.offset[i + 1]; ++k)
+                Ap += (ai - a_[fluidNbr_.index[k]]).dot(fluidNbr_.gradW[k]);
+            Ap *= V;
+            for (uint32_t k = boundaryNbr_.offset[i]; k < boundaryNbr_.offset[i + 1]; ++k)
+                Ap += bVolume_[boundaryNbr_.index[k]] * ai.dot(boundaryNbr_.gradW[k]);
+            Ap *= hp;
+            const Real r = source[i] - Ap;
+            kappa[i] = std::max(kappa[i] - Real(0.5) * r * alpha_[i] * invHp, Real(0));
+            // Sparse particles (near the free surface) do not count toward divergence error.
+            const bool counts = densitySolve || (fluidNbr_.offset[i + 1] - fluidNbr_.offset[i]) +
+                                                            (boundaryNbr_.offset[i + 1] - boundaryNbr_.offset[i]) >= 20;
+            residual[i] = counts ? std::max(-r, Real(0)) : 0;
+        });
+        err = deterministicSum(n, [&](size_t i) { return double(residual[i]); }) / double(std::max<size_t>(n, 1));
+        if (it + 1 >= minIterations && err <= eta) {
+            ++it;
+            break;
+        }
+    }
+    if (densitySolve) stats_.densityError = err;
+    return it;
+}
+
+void FluidSimulation::solveDivergence(double dt) {
+    const size_t n = x_.size();
+    const Real V = Real(volume_);
+    source_.resize(n);
+    forEachParticle(n, [&](size_t i) {
+        Real div = 0;
+        for (uint32_t k = fluidNbr_.offset[i]; k < fluidNbr_.offset[i + 1]; ++k)
+            div += (v_[i] - v_[fluidNbr_.index[k]]).dot(fluidNbr_.gradW[k]);
+        div *= V;
+        for (uint32_t k = boundaryNbr_.offset[i]; k < boundaryNbr_.offset[i + 1]; ++k)
+            div += bVolume_[boundaryNbr_.index[k]] * v_[i].dot(boundaryNbr_.gradW[k]);
+        const uint32_t nb = (fluidNbr_.offset[i + 1] - fluidNbr_.offset[i]) +
+                            (boundaryNbr_.offset[i + 1] - boundaryNbr_.offset[i]);
+        // Only compression is corrected, and not at the sparse free surface.
+        if (nb < 20 || div < 0) div = 0;
+        source_[i] = -div;
+        // Warm start from the previous step's solution (stored times dt).
+        kappaV_[i] = div > 0 ? Real(0.5) * std::min(kappaV_[i], Real(0.5)) / Real(dt) : 0;
+    });
+    const double eta = scene_.solver.maxDivergenceError / dt;
+    stats_.divergenceIterations = relaxedJacobi(kappaV_, source_, dt, eta, 1, false);
+    pressureAccelerations(kappaV_);
+    forEachParticle(n, [&](size_t i) {
+        v_[i] += Real(dt) * a_[i];
+        kappaV_[i] *= Real(dt);
+    });
+}
+
+void FluidSimulation::solveDensity(double dt) {
+    const size_t n = x_.size();
+    const Real V = Real(volume_);
+    const Real rho0 = Real(rho0_);
+    const Real h2 = Real(dt * dt);
+    source_.resize(n);
+    forEachParticle(n, [&](size_t i) {
+        Real delta = 0;
+        for (uint32_t k = fluidNbr_.offset[i]; k < fluidNbr_.offset[i + 1]; ++k)
+            delta += (v_[i] - v_[fluidNbr_.index[k]]).dot(fluidNbr_.gradW[k]);
+        delta *= V;
+        for (uint32_t k = boundaryNbr_.offset[i]; k < boundaryNbr_.offset[i + 1]; ++k)
+            delta += bVolume_[boundaryNbr_.index[k]] * v_[i].dot(boundaryNbr_.gradW[k]);
+        // Predicted density; expansion is left alone (free surface).
+        const Real predicted = std::max(rho_[i] / rho0 + Real(dt) * delta, Real(1));
+        source_[i] = 1 - predicted;
+        // Warm start from half the previous step's pressure (as SPlisHSPlasH does: a full
+        // restart overshoots). Starting from the pressure, which every frame file stores,
+        // rather than from a private solver array keeps resumed runs identical.
+        kappa_[i] = predicted > 1 ? Real(0.5) * std::min(p_[i] * rho0 / (rho_[i] * rho_[i]), Real(0.00025) / h2) : 0;
+    });
+    stats_.pressureIterations = relaxedJacobi(kappa_, source_, dt * dt, scene_.solver.maxDensityError, 2, true);
+    pressureAccelerations(kappa_);
+    forEachParticle(n, [&](size_t i) {
+        v_[i] += Real(dt) * a_[i];
+        // kappa = p / rho^2 normalized by rho0, so p = kappa rho^2 / rho0.
+        p_[i] = kappa_[i] * rho_[i] * rho_[i] / rho0;
+    });
+}
+
+void FluidSimulation::integratePositions(double dt) {
+    const size_t n = x_.size();
+    xOld_ = x_;
+    std::atomic<size_t> bad{size_t(-1)};
+    const Real rdt = Real(dt);
+    forEachParticle(n, [&](size_t i) {
+        x_[i] += rdt * v_[i];
+        // Checked before the container sees it: constrain() would park a NaN particle at
+        // its old position and hide the blow-up.
+        if (!x_[i].allFinite() || !v_[i].allFinite()) {
+            size_t expected = size_t(-1);
+            bad.compare_exchange_strong(expected, i);
+        }
+        container_->constrain(xOld_[i], x_[i], v_[i]);
+    });
+    if (bad != size_t(-1)) {
+        std::ostringstream msg;
+        msg << "non-finite position or velocity of particle " << id_[bad] << " at t = " << time_ + dt
+            << " s (step " << steps_ + 1 << ", dt " << dt << " s): the simulation blew up";
+        throw SimulationError(msg.str());
+    }
+}
+
+double FluidSimulation::step(double dtLimit) {
+    const double dt = chooseTimeStep(dtLimit);
+    if (scene_.solver.kind == SolverParams::Kind::WCSPH) {
+        stepWCSPH(dt);
+    } else {
+        computeFactors();
+        solveDivergence(dt);
+        nonPressureAccelerations(dt);
+        forEachParticle(x_.size(), [&](size_t i) { v_[i] += Real(dt) * a_[i]; });
+        solveDensity(dt);
+    }
+    integratePositions(dt);
+    time_ += dt;
+    ++steps_;
+    stats_.dt = dt;
+    sortAndSearch();
+    return dt;
+}
+
+void FluidSimulation::advanceTo(double tEnd) {
+    // The divergence solve's warm start restarts at every frame, so that a run resumed
+    // from a frame file (positions, velocities, pressures) continues exactly like an
+    // uninterrupted one. It converges in a few iterations from zero.
+    std::fill(kappaV_.begin(), kappaV_.end(), Real(0));
+    while (time_ < tEnd) {
+        step(tEnd - time_);
+        if (tEnd - time_ < 1e-12 * std::max(1.0, tEnd)) time_ = tEnd;
+    }
+}
+
+namespace {
+template <class T>
+std::vector<T> byId(const std::vector<T>& data, const std::vector<uint32_t>& id) {
+    std::vector<T> out(data.size());
+    for (size_t i = 0; i < data.size(); ++i) out[id[i]] = data[i];
+    return out;
+}
+} // namespace
+
+std::vector<Vec3> FluidSimulation::positionsById() const { return byId(x_, id_); }
+std::vector<Vec3> FluidSimulation::velocitiesById() const { return byId(v_, id_); }
+std::vector<Real> FluidSimulation::densitiesById() const { return byId(rho_, id_); }
+std::vector<Real> FluidSimulation::pressuresById() const { return byId(p_, id_); }
+
+void FluidSimulation::setState(double time, const std::vector<Vec3>& xById, const std::vector<Vec3>& vById,
+                               const std::vector<Real>& pById) {
+    if (xById.size() != x_.size() || vById.size() != x_.size() || (!pById.empty() && pById.size() != x_.size()))
+        throw SimulationError("state has " + std::to_string(xById.size()) + " particles, the scene makes " +
+                              std::to_string(x_.size()));
+    for (size_t i = 0; i < x_.size(); ++i) id_[i] = uint32_t(i);
+    x_ = xById;
+    v_ = vById;
+    if (pById.empty()) std::fill(p_.begin(), p_.end(), Real(0));
+    else p_ = pById;
+    time_ = time;
+    std::fill(kappaV_.begin(), kappaV_.end(), Real(0));
+    sortAndSearch();
+}
+
+} // namespace ferro

@@ -1,0 +1,133 @@
+#pragma once
+// The SPH fluid solver of ferro-sim: weakly compressible SPH (Becker & Teschner 2007,
+// the paper's kind of solver) and divergence-free SPH (Bender & Koschier 2017) for
+// larger steps, with Akinci 2012 boundary particles, viscosity, Akinci 2013 surface
+// tension, gravity and a CFL-adaptive time step.
+//
+// Particles live in (cell, id) order, re-sorted every step; ids are stable and all
+// exported data is in id order. A step is a pure function of the state at its start
+// (no parallel floating-point reductions whose order varies), so runs are repeatable
+// and resume bit-for-bit from a frame file.
+#include "sim/Container.hpp"
+#include "sim/Kernel.hpp"
+#include "sim/NeighborSearch.hpp"
+#include "sim/SimParams.hpp"
+
+#include <memory>
+#include <stdexcept>
+#include <vector>
+
+namespace ferro {
+
+/// The run cannot continue (non-finite state, collapsed time step). what() is one line.
+class SimulationError : public std::runtime_error {
+public:
+    using std::runtime_error::runtime_error;
+};
+
+/// Counters of the most recent step, for progress lines and benchmarks.
+struct StepStats {
+    double dt = 0;
+    int pressureIterations = 0;
+    int divergenceIterations = 0;
+    double densityError = 0;     ///< mean relative compression after the step's solve
+    size_t neighborPairs = 0;
+};
+
+/// Initial fluid particles of a scene (lattice fill of its blocks) and their spacing.
+struct FluidSeed {
+    double spacing = 0;
+    std::vector<Vec3> positions;
+    std::vector<Vec3> velocities;
+};
+/// Fills the scene's blocks; throws SceneError naming the block for fluid outside the
+/// container or a block that cannot hold its count.
+FluidSeed seedFluid(const SimScene& scene, const Container& container);
+
+class FluidSimulation {
+public:
+    explicit FluidSimulation(const SimScene& scene);
+    ~FluidSimulation();
+
+    size_t size() const { return x_.size(); }
+    double time() const { return time_; }
+    double spacing() const { return spacing_; }
+    double supportRadius() const { return h_; }
+    double particleMass() const { return mass_; }
+    double restDensity() const { return rho0_; }
+    const SimScene& scene() const { return scene_; }
+    const Container& container() const { return *container_; }
+    const StepStats& lastStep() const { return stats_; }
+    size_t stepCount() const { return steps_; }
+    double soundSpeed() const { return soundSpeed_; }
+
+    /// Advances to exactly `tEnd` with as many steps as the CFL condition needs; the last
+    /// step is shortened to land on tEnd. Throws SimulationError on a non-finite state.
+    void advanceTo(double tEnd);
+    /// One step of at most `dtLimit` seconds; returns the step taken.
+    double step(double dtLimit);
+
+    /// Per-particle data in id order (the order of the initial fill and of every file).
+    std::vector<Vec3> positionsById() const;
+    std::vector<Vec3> velocitiesById() const;
+    std::vector<Real> densitiesById() const;   ///< kg/m^3, as of the last neighbour update
+    std::vector<Real> pressuresById() const;   ///< Pa, from the last pressure solve
+    /// Replaces the state (resume): time, positions, velocities and pressures (the DFSPH
+    /// warm start; may be empty) in id order.
+    void setState(double time, const std::vector<Vec3>& xById, const std::vector<Vec3>& vById,
+                  const std::vector<Real>& pById);
+    /// Recomputes densities for the current positions (after setState, before output).
+    void updateDensities();
+
+    // Sorted-order access for diagnostics and tests.
+    const std::vector<Vec3>& positions() const { return x_; }
+    const std::vector<Vec3>& velocities() const { return v_; }
+    const std::vector<Real>& densities() const { return rho_; }
+    const std::vector<Real>& pressures() const { return p_; }
+    const std::vector<Vec3>& boundaryPositions() const { return bx_; }
+
+private:
+    void sortAndSearch();
+    void computeFactors();
+    void nonPressureAccelerations(double dt);
+    double chooseTimeStep(double dtLimit) const;
+    void stepWCSPH(double dt);
+    void solveDivergence(double dt);
+    void solveDensity(double dt);
+    int relaxedJacobi(std::vector<Real>& kappa, const std::vector<Real>& source, double hPow,
+                      double eta, int minIterations, bool densitySolve);
+    void pressureAccelerations(const std::vector<Real>& kappa);
+    void integratePositions(double dt);
+
+    SimScene scene_;
+    std::unique_ptr<Container> container_;
+    CubicSplineKernel kernel_;
+    CohesionKernel cohesion_;
+    double spacing_ = 0, h_ = 0, mass_ = 0, volume_ = 0, rho0_ = 0;
+    double soundSpeed_ = 0, gamma_ = 0, capillaryDt_ = 1e30;
+    double viscosity_ = 0;   // physical plus artificial kinematic viscosity [m^2/s]
+    double time_ = 0;
+    size_t steps_ = 0;
+    StepStats stats_;
+
+    // Fluid particles, sorted by (cell, id).
+    std::vector<Vec3> x_, v_, a_, xOld_;
+    std::vector<Real> rho_, p_, alpha_, kappa_, kappaV_, source_, div_;
+    std::vector<Vec3> normal_;
+    std::vector<uint32_t> id_;
+    std::vector<uint16_t> boundaryCount_;
+    SortedGrid grid_;
+    NeighborLists fluidNbr_, boundaryNbr_;
+    std::vector<Real> px_, py_, pz_;          // coordinates again, split for the search
+    std::vector<uint32_t> scratch_, bScratch_; // fixed-capacity neighbour lists of pass 1
+    std::vector<uint32_t> order_;
+    size_t capacity_ = 64, bCapacity_ = 32;
+
+    // Boundary particles (static) with Akinci volumes.
+    std::vector<Vec3> bx_;
+    std::vector<Real> bVolume_;
+    std::vector<Real> bpx_, bpy_, bpz_;
+    SortedGrid bGrid_;
+};
+
+} // namespace ferro

@@ -1,0 +1,176 @@
+#include "sim/ShotRunner.hpp"
+
+#include "sim/FluidSimulation.hpp"
+#include "sim/ParticleFile.hpp"
+#include "sim/SceneFile.hpp"
+
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <filesystem>
+#include <iostream>
+#include <regex>
+#include <sstream>
+
+namespace fs = std::filesystem;
+
+namespace ferro {
+
+std::string particleFramePath(const std::string& dir, int frame) {
+    char name[64];
+    std::snprintf(name, sizeof name, "particles_%04d.ply", frame);
+    return (fs::path(dir) / name).string();
+}
+
+namespace {
+
+std::string formatSeconds(double s) {
+    std::ostringstream o;
+    if (s >= 3600) o << int(s / 3600) << "h" << int(std::fmod(s, 3600) / 60) << "m";
+    else if (s >= 60) o << int(s / 60) << "m" << int(std::fmod(s, 60)) << "s";
+    else o << int(std::ceil(s)) << "s";
+    return o.str();
+}
+
+/// Frame indices of complete-looking particle files in `dir` (sorted), removing
+/// temporary files that a killed writer left behind.
+std::vector<int> existingFrames(const std::string& dir) {
+    std::vector<int> frames;
+    if (!fs::is_directory(dir)) return frames;
+    static const std::regex frameName(R"(particles_(\d+)\.ply)");
+    static const std::regex tempName(R"(particles_\d+\.ply\.tmp-.*)");
+    for (const auto& e : fs::directory_iterator(dir)) {
+        const std::string name = e.path().filename().string();
+        std::smatch m;
+        if (std::regex_match(name, m, frameName)) frames.push_back(std::stoi(m[1]));
+        else if (std::regex_match(name, tempName)) fs::remove(e.path());
+    }
+    std::sort(frames.begin(), frames.end());
+    return frames;
+}
+
+ParticleTable frameTable(const FluidSimulation& sim, int frame, const RunOptions& opt) {
+    ParticleTable t;
+    t.names = {"x", "y", "z", "vx", "vy", "vz", "density", "pressure"};
+    const auto x = sim.positionsById();
+    const auto v = sim.velocitiesById();
+    const auto rho = sim.densitiesById();
+    const auto p = sim.pressuresById();
+    const size_t n = x.size();
+    t.values.resize(n * t.names.size());
+    for (size_t i = 0; i < n; ++i) {
+        float* row = &t.values[i * t.names.size()];
+        row[0] = x[i].x(); row[1] = x[i].y(); row[2] = x[i].z();
+        row[3] = v[i].x(); row[4] = v[i].y(); row[5] = v[i].z();
+        row[6] = rho[i];
+        row[7] = p[i];
+    }
+    auto num = [](double d) {
+        std::ostringstream o;
+        o.precision(17);
+        o << d;
+        return o.str();
+    };
+    t.setComment("ferro", "particles 1");
+    t.setComment("frame", std::to_string(frame));
+    t.setComment("time", num(sim.time()));
+    t.setComment("fps", num(sim.scene().shot.fps));
+    t.setComment("spacing", num(sim.spacing()));
+    t.setComment("support_radius", num(sim.supportRadius()));
+    t.setComment("particle_mass", num(sim.particleMass()));
+    t.setComment("rest_density", num(sim.restDensity()));
+    t.setComment("scene", sim.scene().path);
+    t.setComment("scene_fingerprint", opt.fingerprint);
+    return t;
+}
+
+} // namespace
+
+void runShot(const SimScene& scene, const RunOptions& opt) {
+    if (opt.outDir.empty()) throw SceneError("--out: an output directory is required");
+    std::error_code ec;
+    fs::create_directories(opt.outDir, ec);
+    if (ec) throw ParticleFileError(opt.outDir + ": cannot create directory: " + ec.message());
+
+    std::vector<int> frames = existingFrames(opt.outDir);
+    if (!frames.empty() && !opt.resume && !opt.overwrite)
+        throw SceneError(opt.outDir + ": already holds particle frames; pass --resume to continue or --overwrite to start over");
+    if (opt.overwrite && !opt.resume) {
+        for (int f : frames) fs::remove(particleFramePath(opt.outDir, f));
+        frames.clear();
+    }
+
+    FluidSimulation sim(scene);
+    const int lastFrame = opt.maxFrames >= 0 ? std::min(opt.maxFrames, scene.shot.frameCount()) : scene.shot.frameCount();
+    const double fps = scene.shot.fps;
+
+    int frame = 0;
+    bool resumed = false;
+    // Resume from the newest frame that reads back completely (writes are atomic, so
+    // normally the newest; a damaged file is skipped, never rewritten).
+    for (auto it = frames.rbegin(); opt.resume && it != frames.rend(); ++it) {
+        ParticleTable t;
+        try {
+            t = readParticleFile(particleFramePath(opt.outDir, *it));
+        } catch (const ParticleFileError& e) {
+            std::cerr << "ferro-sim: warning: skipping unreadable " << e.what() << "\n";
+            continue;
+        }
+        const std::string fp = t.comment("scene_fingerprint");
+        if (fp != opt.fingerprint)
+            throw SceneError(particleFramePath(opt.outDir, *it) +
+                             ": written from a different scene or --set overrides; resume with the same ones, or --overwrite");
+        if (t.rows() != sim.size())
+            throw SceneError(particleFramePath(opt.outDir, *it) + ": holds " + std::to_string(t.rows()) +
+                             " particles, the scene makes " + std::to_string(sim.size()));
+        std::vector<Real> pressure;
+        if (const int col = t.column("pressure"); col >= 0)
+            for (size_t i = 0; i < t.rows(); ++i) pressure.push_back(t.at(i, col));
+        sim.setState(*it / fps, t.vec3("x", "y", "z"), t.vec3("vx", "vy", "vz"), pressure);
+        frame = *it;
+        resumed = true;
+        break;
+    }
+    if (!resumed) {
+        if (opt.resume && !frames.empty())
+            throw ParticleFileError(opt.outDir + ": no readable particle frame to resume from");
+        writeParticleFile(particleFramePath(opt.outDir, 0), frameTable(sim, 0, opt));
+    }
+    if (!opt.quiet)
+        std::cerr << "ferro-sim: " << sim.size() << " particles, spacing " << sim.spacing() * 1e3 << " mm, "
+                  << (scene.solver.kind == SolverParams::Kind::DFSPH ? "DFSPH" : "WCSPH") << ", "
+                  << sim.boundaryPositions().size() << " boundary particles; "
+                  << (resumed ? "resuming after frame " + std::to_string(frame) : std::string("starting"))
+                  << ", frames to " << lastFrame << "\n";
+
+    using Clock = std::chrono::steady_clock;
+    const auto start = Clock::now();
+    const size_t startSteps = sim.stepCount();
+    const int firstFrame = frame;
+    while (frame < lastFrame) {
+        ++frame;
+        const auto frameStart = Clock::now();
+        const size_t stepsBefore = sim.stepCount();
+        sim.advanceTo(frame / fps);
+        writeParticleFile(particleFramePath(opt.outDir, frame), frameTable(sim, frame, opt));
+        if (!opt.quiet) {
+            const double now = std::chrono::duration<double>(Clock::now() - start).count();
+            const double frameSec = std::chrono::duration<double>(Clock::now() - frameStart).count();
+            const size_t steps = sim.stepCount() - stepsBefore;
+            const double eta = now / (frame - firstFrame) * (lastFrame - frame);
+            const StepStats& st = sim.lastStep();
+            std::fprintf(stderr,
+                         "frame %4d/%d  t %.4f s  %5zu steps  %6.1f steps/s  dt %.2e s  iter p %d d %d  "
+                         "rho err %.3f%%  ETA %s\n",
+                         frame, lastFrame, sim.time(), steps, steps / std::max(frameSec, 1e-9), st.dt,
+                         st.pressureIterations, st.divergenceIterations, 100 * st.densityError,
+                         formatSeconds(eta).c_str());
+        }
+    }
+    if (!opt.quiet) {
+        const double wall = std::chrono::duration<double>(Clock::now() - start).count();
+        std::fprintf(stderr, "ferro-sim: done, %zu steps in %.1f s wall\n", sim.stepCount() - startSteps, wall);
+    }
+}
+
+} // namespace ferro
