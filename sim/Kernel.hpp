@@ -45,6 +45,19 @@ public:
         return rij * (dWdq * invH_ / r);
     }
 
+    /// W and its gradient together for rij = x_i - x_j with r2 = |rij|^2 < h^2: one square
+    /// root and no unpredictable branch (the two spline pieces are blended), since the
+    /// neighbour search evaluates this for every pair of every step.
+    void evaluate(const Vec3& rij, Real r2, Real& w, Vec3& grad) const {
+        const Real r = std::sqrt(r2);
+        const Real q = r * invH_;
+        const Real f = 1 - q;
+        const bool inner = q <= Real(0.5);
+        w = k_ * (inner ? Real(6) * q * q * (q - 1) + 1 : 2 * f * f * f);
+        const Real dWdq = inner ? l_ * q * (Real(3) * q - 2) : -l_ * f * f;
+        grad = r > Real(1e-9) * h_ ? Vec3(rij * (dWdq * invH_ / r)) : Vec3(Vec3::Zero());
+    }
+
 private:
     Real h_, invH_, k_, l_;
 };

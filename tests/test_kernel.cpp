@@ -82,3 +82,19 @@ TEST_CASE("Akinci cohesion kernel: support, repulsion core, attraction", "[kerne
     REQUIRE(c.C(0.75f) > 0);  // attractive in the outer half
     REQUIRE(c.C(0.4999f) == Approx(c.C(0.5001f)).epsilon(1e-2));
 }
+
+TEST_CASE("fused kernel evaluation matches W and grad W", "[kernel]") {
+    const CubicSplineKernel k(0.003f);
+    std::mt19937 rng(11);
+    std::uniform_real_distribution<float> u(-0.0018f, 0.0018f);
+    for (int t = 0; t < 2000; ++t) {
+        const Vec3 rij(u(rng), u(rng), u(rng));
+        const float r2 = rij.squaredNorm();
+        if (r2 >= 0.003f * 0.003f) continue;
+        float w;
+        Vec3 g;
+        k.evaluate(rij, r2, w, g);
+        REQUIRE(w == Approx(k.W(std::sqrt(r2))).epsilon(1e-5));
+        REQUIRE((g - k.gradW(rij, std::sqrt(r2))).norm() <= 1e-5f * k.gradW(rij, std::sqrt(r2)).norm() + 1e-3f);
+    }
+}
