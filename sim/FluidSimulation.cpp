@@ -121,17 +121,17 @@ inline uint32_t gatherRange(const Real* px, const Real* py, const Real* pz, uint
 /// Neighbours of `p` among the points of `grid` (coordinates px/py/pz), into `out`, which
 /// must hold `room` entries. Returns the count, or room + 1 if they did not fit.
 inline uint32_t gatherNeighbors(const SortedGrid& grid, const Real* px, const Real* py, const Real* pz,
-                                const Vec3& p, Real h2, uint32_t self, uint32_t* out, uint32_t room) {
-    int c[3];
-    grid.geometry().cellOf(p, c);
+                                const Vec3& p, Real radius, uint32_t self, uint32_t* out, uint32_t room) {
     uint32_t count = 0;
-    for (int dz = -1; dz <= 1; ++dz)
-        for (int dy = -1; dy <= 1; ++dy) {
-            uint32_t beg, end;
-            grid.rowRange(c[0], c[1] + dy, c[2] + dz, beg, end);
-            if (count + (end - beg) > room) return room + 1;
-            count = gatherRange(px, py, pz, beg, end, p, h2, self, out, count);
+    const Real h2 = radius * radius;
+    grid.forEachCandidateRange(p, [&](uint32_t beg, uint32_t end) {
+        if (count > room) return;
+        if (count + (end - beg) > room) {
+            count = room + 1;
+            return;
         }
+        count = gatherRange(px, py, pz, beg, end, p, h2, self, out, count);
+    });
     return count;
 }
 
@@ -253,18 +253,13 @@ FluidSimulation::FluidSimulation(const SimScene& scene)
     bVolume_.assign(bx_.size(), 0);
     const Real h2 = Real(h_ * h_);
     forEachParticle(bx_.size(), [&](size_t b) {
-        int c[3];
-        bGrid_.geometry().cellOf(bx_[b], c);
         Real sum = 0;
-        for (int dz = -1; dz <= 1; ++dz)
-            for (int dy = -1; dy <= 1; ++dy) {
-                uint32_t beg, end;
-                bGrid_.rowRange(c[0], c[1] + dy, c[2] + dz, beg, end);
-                for (uint32_t k = beg; k < end; ++k) {
-                    const Real r2 = (bx_[b] - bx_[k]).squaredNorm();
-                    if (r2 < h2) sum += kernel_.W(std::sqrt(r2));
-                }
+        bGrid_.forEachCandidateRange(bx_[b], [&](uint32_t beg, uint32_t end) {
+            for (uint32_t k = beg; k < end; ++k) {
+                const Real r2 = (bx_[b] - bx_[k]).squaredNorm();
+                if (r2 < h2) sum += kernel_.W(std::sqrt(r2));
             }
+        });
         bVolume_[b] = wallScale / sum;
     });
 
@@ -323,7 +318,6 @@ void FluidSimulation::sortAndSearch() {
     grid_.index(x_, grid_.geometry());
     splitCoordinates(x_, px_, py_, pz_);
 
-    const Real h2 = Real(h_ * h_);
     const bool haveBoundary = !bx_.empty();
 
     // Pass 1: fluid and boundary neighbours into fixed-capacity scratch lists. The
@@ -338,15 +332,15 @@ void FluidSimulation::sortAndSearch() {
         tbb::parallel_for(tbb::blocked_range<size_t>(0, n, kGrain), [&](const tbb::blocked_range<size_t>& r) {
             std::vector<uint32_t> buffer(kRoom + 1);
             for (size_t i = r.begin(); i != r.end(); ++i) {
-                uint32_t cnt = gatherNeighbors(grid_, px_.data(), py_.data(), pz_.data(), x_[i], h2, uint32_t(i),
-                                               buffer.data(), kRoom);
+                uint32_t cnt = gatherNeighbors(grid_, px_.data(), py_.data(), pz_.data(), x_[i], Real(h_),
+                                               uint32_t(i), buffer.data(), kRoom);
                 if (cnt > capacity_) overflow = true;
                 std::copy_n(buffer.data(), std::min<uint32_t>(cnt, uint32_t(capacity_)), &scratch_[i * capacity_]);
                 fluidCount[i] = cnt;
                 cnt = 0;
                 if (haveBoundary) {
-                    cnt = gatherNeighbors(bGrid_, bpx_.data(), bpy_.data(), bpz_.data(), x_[i], h2, uint32_t(-1),
-                                          buffer.data(), kRoom);
+                    cnt = gatherNeighbors(bGrid_, bpx_.data(), bpy_.data(), bpz_.data(), x_[i], Real(h_),
+                                          uint32_t(-1), buffer.data(), kRoom);
                     if (cnt > bCapacity_) overflow = true;
                     std::copy_n(buffer.data(), std::min<uint32_t>(cnt, uint32_t(bCapacity_)), &bScratch_[i * bCapacity_]);
                 }

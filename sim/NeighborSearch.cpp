@@ -13,26 +13,27 @@ namespace ferro {
 
 void GridGeometry::fit(const Vec3& lo, const Vec3& hi, Real size, size_t maxCells) {
     cellSize = size;
-    // One spare cell on each side so that the 27-cell stencil never leaves the grid
-    // for a point inside [lo, hi].
+    // kPad spare cells on each side so that the 3-cell stencil never leaves the grid for
+    // a point inside [lo, hi].
     for (;;) {
         size_t total = 1;
         for (int a = 0; a < 3; ++a) {
             const double extent = std::max(0.0, double(hi[a]) - double(lo[a]));
-            dims[a] = int(std::floor(extent / cellSize)) + 3;
+            dims[a] = int(std::floor(extent / cellSize)) + 1 + 2 * kPad;
             total *= size_t(dims[a]);
         }
         if (total <= maxCells) break;
         cellSize *= Real(1.26); // doubles the cell volume every three rounds
     }
-    origin = lo - Vec3::Constant(cellSize);
+    origin = lo - Vec3::Constant(kPad * cellSize);
 }
 
 void GridGeometry::cellOf(const Vec3& p, int c[3]) const {
     for (int a = 0; a < 3; ++a) {
-        // Clamp before converting: a NaN or far-away coordinate must not become UB.
-        const Real f = std::floor((p[a] - origin[a]) / cellSize);
-        c[a] = f >= 1 ? (f <= Real(dims[a] - 2) ? int(f) : dims[a] - 2) : 1;
+        // Clamp before converting: a NaN or far-away coordinate must not become UB. Inside
+        // the clamp the value is positive, so truncation is floor (and no library call).
+        const Real f = (p[a] - origin[a]) / cellSize;
+        c[a] = f >= kPad ? (f < Real(dims[a] - kPad) ? int(f) : dims[a] - 1 - kPad) : kPad;
     }
 }
 
@@ -61,19 +62,19 @@ Bounds boundsOf(const std::vector<Vec3>& x) {
 }
 } // namespace
 
-void SortedGrid::sort(const std::vector<Vec3>& x, const std::vector<uint32_t>& tie, Real cellSize,
+void SortedGrid::sort(const std::vector<Vec3>& x, const std::vector<uint32_t>& tie, Real radius,
                       std::vector<uint32_t>& order) {
     const size_t n = x.size();
     Bounds b = boundsOf(x);
     if (n == 0) b.lo = b.hi = Vec3::Zero();
-    geom_.fit(b.lo, b.hi, cellSize);
+    geom_.fit(b.lo, b.hi, radius);
     keys_.resize(n);
     // Key = cell << 32 | tie: a strict total order, so the sort result is unique.
     tbb::parallel_for(tbb::blocked_range<size_t>(0, n, 4096), [&](const tbb::blocked_range<size_t>& r) {
         for (size_t i = r.begin(); i != r.end(); ++i) {
             int c[3];
             geom_.cellOf(x[i], c);
-            keys_[i] = (uint64_t(geom_.linear(c)) << 32) | tie[i];
+            keys_[i] = (uint64_t(geom_.linear(c[0], c[1], c[2])) << 32) | tie[i];
         }
     });
     // Map tie value -> current index, then sort the keys alone (8 bytes each).
@@ -91,16 +92,10 @@ void SortedGrid::index(const std::vector<Vec3>& sortedX, const GridGeometry& g) 
     for (const Vec3& p : sortedX) {
         int c[3];
         geom_.cellOf(p, c);
-        ++cellStart_[geom_.linear(c) + 1];
+        ++cellStart_[geom_.linear(c[0], c[1], c[2]) + 1];
     }
     for (size_t c = 0; c < cells; ++c) cellStart_[c + 1] += cellStart_[c];
 }
 
-void SortedGrid::rowRange(int cx, int cy, int cz, uint32_t& begin, uint32_t& end) const {
-    const int lo[3] = {std::max(cx - 1, 0), cy, cz};
-    const int hi[3] = {std::min(cx + 1, geom_.dims[0] - 1), cy, cz};
-    begin = cellStart_[geom_.linear(lo)];
-    end = cellStart_[geom_.linear(hi) + 1];
-}
 
 } // namespace ferro

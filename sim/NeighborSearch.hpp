@@ -7,13 +7,18 @@
 // sums in exactly the same order as an uninterrupted one (bitwise-identical frames).
 #include "sim/Types.hpp"
 
+#include <algorithm>
+#include <cmath>
 #include <cstdint>
 #include <vector>
 
 namespace ferro {
 
-/// Dense grid of cells of size >= `cellSize` over an axis-aligned box.
+/// Dense grid of cells, one search radius wide, over an axis-aligned box. (Cells of half
+/// a radius with a 5 x 5 row stencil cut to the sphere test fewer candidates, but were
+/// slower here: a cell then holds one particle, and the per-row overhead wins.)
 struct GridGeometry {
+    static constexpr int kPad = 1;  ///< spare cells on every side (the stencil's reach)
     Vec3 origin{0, 0, 0};
     Real cellSize = 1;
     int dims[3] = {1, 1, 1};
@@ -23,7 +28,7 @@ struct GridGeometry {
     void fit(const Vec3& lo, const Vec3& hi, Real cellSize, size_t maxCells = size_t(1) << 24);
     size_t cellCount() const { return size_t(dims[0]) * dims[1] * dims[2]; }
     void cellOf(const Vec3& p, int c[3]) const;
-    uint32_t linear(const int c[3]) const { return uint32_t((size_t(c[2]) * dims[1] + c[1]) * dims[0] + c[0]); }
+    uint32_t linear(int cx, int cy, int cz) const { return uint32_t((size_t(cz) * dims[1] + cy) * dims[0] + cx); }
 };
 
 /// Points sorted by cell with per-cell start offsets.
@@ -31,14 +36,27 @@ class SortedGrid {
 public:
     /// Computes the permutation that sorts `x` by (cell, tie) where `tie[i]` breaks ties
     /// deterministically (particle ids); `order[k]` is the old index of the k-th point.
-    void sort(const std::vector<Vec3>& x, const std::vector<uint32_t>& tie, Real cellSize,
+    /// Cells are `radius` wide.
+    void sort(const std::vector<Vec3>& x, const std::vector<uint32_t>& tie, Real radius,
               std::vector<uint32_t>& order);
     /// Builds cell offsets for points already sorted by cell with geometry `g`.
     void index(const std::vector<Vec3>& sortedX, const GridGeometry& g);
 
     const GridGeometry& geometry() const { return geom_; }
-    /// Index range [begin, end) of the points in cells c0..c0+2 along x (clamped) of row (cy, cz).
-    void rowRange(int cx, int cy, int cz, uint32_t& begin, uint32_t& end) const;
+
+    /// Calls f(begin, end) for index ranges that together hold every point within
+    /// `radius` (the cell size) of p, and more: the 3 x 3 rows of three cells around p's
+    /// cell, each one contiguous range since points are sorted by cell.
+    template <class F>
+    void forEachCandidateRange(const Vec3& p, F&& f) const {
+        int c[3];
+        geom_.cellOf(p, c);
+        for (int dz = -1; dz <= 1; ++dz)
+            for (int dy = -1; dy <= 1; ++dy) {
+                const uint32_t row = geom_.linear(c[0], c[1] + dy, c[2] + dz);
+                f(cellStart_[row - 1], cellStart_[row + 2]);
+            }
+    }
 
 private:
     GridGeometry geom_;
