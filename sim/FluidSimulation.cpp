@@ -361,12 +361,11 @@ void FluidSimulation::sortAndSearch() {
         const size_t pairs = lists.offset[n];
         lists.index.resize(pairs);
         lists.gradW.resize(pairs);
-        lists.W.resize(pairs);
     };
     prefix(fluidCount, fluidNbr_);
     prefix(boundaryCount, boundaryNbr_);
 
-    // Pass 2: compact, store W and grad W per pair, and sum the density.
+    // Pass 2: compact, store grad W per pair, and sum the density.
     rho_.resize(n);
     const Real V = Real(volume_);
     forEachParticle(n, [&](size_t i) {
@@ -378,8 +377,9 @@ void FluidSimulation::sortAndSearch() {
             const uint32_t j = in[k];
             const Vec3 d = xi - x_[j];
             fluidNbr_.index[o + k] = j;
-            kernel_.evaluate(d, d.squaredNorm(), fluidNbr_.W[o + k], fluidNbr_.gradW[o + k]);
-            sumW += fluidNbr_.W[o + k];
+            Real w;
+            kernel_.evaluate(d, d.squaredNorm(), w, fluidNbr_.gradW[o + k]);
+            sumW += w;
         }
         Real density = V * sumW;
         const uint32_t ob = boundaryNbr_.offset[i], bcnt = boundaryNbr_.offset[i + 1] - ob;
@@ -388,8 +388,9 @@ void FluidSimulation::sortAndSearch() {
             const uint32_t b = bin[k];
             const Vec3 d = xi - bx_[b];
             boundaryNbr_.index[ob + k] = b;
-            kernel_.evaluate(d, d.squaredNorm(), boundaryNbr_.W[ob + k], boundaryNbr_.gradW[ob + k]);
-            density += bVolume_[b] * boundaryNbr_.W[ob + k];
+            Real w;
+            kernel_.evaluate(d, d.squaredNorm(), w, boundaryNbr_.gradW[ob + k]);
+            density += bVolume_[b] * w;
         }
         rho_[i] = Real(rho0_) * density;
     });

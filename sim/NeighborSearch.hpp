@@ -70,7 +70,6 @@ struct NeighborLists {
     std::vector<uint32_t> offset;   ///< size n + 1
     std::vector<uint32_t> index;    ///< neighbour indices, pair k of particle i at offset[i] + k
     std::vector<Vec3> gradW;        ///< grad_i W(x_i - x_j) of each pair
-    std::vector<Real> W;            ///< W(|x_i - x_j|) of each pair
     size_t pairs() const { return index.size(); }
 };
 
