@@ -368,36 +368,32 @@ void FluidSimulation::sortAndSearch() {
     // Pass 2: compact, store grad W per pair, and sum the density.
     rho_.resize(n);
     const Real V = Real(volume_);
-    forEachParticle(n, [&](size_t i) {
+    // Copies particle i's list from `scratch` into `lists` with each pair's kernel
+    // gradient; returns sum_j volume(j) W_ij.
+    auto compact = [&](size_t i, NeighborLists& lists, const uint32_t* scratch, const std::vector<Vec3>& pts,
+                       auto&& volume) {
         const Vec3 xi = x_[i];
-        Real sumW = kernel_.W0();
-        const uint32_t o = fluidNbr_.offset[i], cnt = fluidNbr_.offset[i + 1] - o;
-        const uint32_t* in = &scratch_[i * capacity_];
+        const uint32_t o = lists.offset[i], cnt = lists.offset[i + 1] - o;
+        Real sum = 0;
         for (uint32_t k = 0; k < cnt; ++k) {
-            const uint32_t j = in[k];
-            const Vec3 d = xi - x_[j];
-            fluidNbr_.index[o + k] = j;
+            const uint32_t j = scratch[k];
+            const Vec3 d = xi - pts[j];
+            lists.index[o + k] = j;
             Real w;
-            kernel_.evaluate(d, d.squaredNorm(), w, fluidNbr_.gradW[o + k]);
-            sumW += w;
+            kernel_.evaluate(d, d.squaredNorm(), w, lists.gradW[o + k]);
+            sum += volume(j) * w;
         }
-        Real density = V * sumW;
-        const uint32_t ob = boundaryNbr_.offset[i], bcnt = boundaryNbr_.offset[i + 1] - ob;
-        const uint32_t* bin = &bScratch_[i * bCapacity_];
-        for (uint32_t k = 0; k < bcnt; ++k) {
-            const uint32_t b = bin[k];
-            const Vec3 d = xi - bx_[b];
-            boundaryNbr_.index[ob + k] = b;
-            Real w;
-            kernel_.evaluate(d, d.squaredNorm(), w, boundaryNbr_.gradW[ob + k]);
-            density += bVolume_[b] * w;
-        }
+        return sum;
+    };
+    forEachParticle(n, [&](size_t i) {
+        const Real density = V * kernel_.W0() +
+                             compact(i, fluidNbr_, &scratch_[i * capacity_], x_, [&](uint32_t) { return V; }) +
+                             compact(i, boundaryNbr_, &bScratch_[i * bCapacity_], bx_,
+                                     [&](uint32_t b) { return bVolume_[b]; });
         rho_[i] = Real(rho0_) * density;
     });
     stats_.neighborPairs = fluidNbr_.pairs();
 }
-
-void FluidSimulation::updateDensities() { sortAndSearch(); }
 
 void FluidSimulation::computeFactors() {
     // alpha_i = 1 / (|sum_j V grad W_ij + sum_b V_b grad W_ib|^2 + sum_j |V grad W_ij|^2),

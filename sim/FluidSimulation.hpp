@@ -76,8 +76,6 @@ public:
     /// warm start; may be empty) in id order.
     void setState(double time, const std::vector<Vec3>& xById, const std::vector<Vec3>& vById,
                   const std::vector<Real>& pById);
-    /// Recomputes densities for the current positions (after setState, before output).
-    void updateDensities();
 
     // Sorted-order access for diagnostics and tests.
     const std::vector<Vec3>& positions() const { return x_; }
