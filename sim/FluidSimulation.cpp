@@ -11,6 +11,10 @@
 #include <cmath>
 #include <sstream>
 
+#if defined(__SSE2__)
+#include <emmintrin.h>
+#endif
+
 namespace ferro {
 
 namespace {
@@ -105,13 +109,35 @@ double blockVolume(const FluidBlock& b) {
 namespace {
 
 /// Appends to `out` the indices j in [begin, end) with |x_j - p|^2 < h2, skipping `self`.
-/// Positions come as separate coordinate arrays so the distance test vectorizes, and the
-/// append is branchless (write always, advance on a hit): the test is unpredictable, and
-/// mispredicted branches used to dominate the search.
+/// Positions come as separate coordinate arrays so that blocks of 8 candidates are tested
+/// with SIMD into a bit mask and only the hits (about one in seven) are appended; the tail
+/// appends branch-free (write always, advance on a hit). An unpredictable branch per
+/// candidate used to dominate the search.
 inline uint32_t gatherRange(const Real* px, const Real* py, const Real* pz, uint32_t begin, uint32_t end,
                             const Vec3& p, Real h2, uint32_t self, uint32_t* out, uint32_t count) {
-    for (uint32_t j = begin; j < end; ++j) {
-        const Real dx = px[j] - p.x(), dy = py[j] - p.y(), dz = pz[j] - p.z();
+    const Real x = p.x(), y = p.y(), z = p.z();
+    uint32_t j = begin;
+#if defined(__SSE2__)
+    // SSE is part of x86-64: four distance tests per instruction, hits as a bit mask.
+    const __m128 vx = _mm_set1_ps(x), vy = _mm_set1_ps(y), vz = _mm_set1_ps(z), vh2 = _mm_set1_ps(h2);
+    for (; j + 8 <= end; j += 8) {
+        uint32_t mask = 0;
+        for (uint32_t l = 0; l < 8; l += 4) {
+            const __m128 dx = _mm_sub_ps(_mm_loadu_ps(px + j + l), vx);
+            const __m128 dy = _mm_sub_ps(_mm_loadu_ps(py + j + l), vy);
+            const __m128 dz = _mm_sub_ps(_mm_loadu_ps(pz + j + l), vz);
+            const __m128 d2 = _mm_add_ps(_mm_add_ps(_mm_mul_ps(dx, dx), _mm_mul_ps(dy, dy)), _mm_mul_ps(dz, dz));
+            mask |= uint32_t(_mm_movemask_ps(_mm_cmplt_ps(d2, vh2))) << l;
+        }
+        if (self - j < 8) mask &= ~(1u << (self - j));
+        while (mask) {
+            out[count++] = j + uint32_t(__builtin_ctz(mask));
+            mask &= mask - 1;
+        }
+    }
+#endif
+    for (; j < end; ++j) {
+        const Real dx = px[j] - x, dy = py[j] - y, dz = pz[j] - z;
         out[count] = j;
         count += uint32_t((dx * dx + dy * dy + dz * dz < h2) & (j != self));
     }
