@@ -57,6 +57,15 @@ bool clampAxis(float& x, float& v, float lo, float hi) {
     return false;
 }
 
+/// A non-finite position goes back to its (valid) old one, at rest. The solver reports
+/// blow-ups before it calls constrain(); this only keeps the container's promise.
+bool parkIfNonFinite(const Vec3& xOld, Vec3& x, Vec3& v) {
+    if (x.allFinite()) return false;
+    x = xOld;
+    v.setZero();
+    return true;
+}
+
 void checkSpacing(double spacing) {
     if (!(spacing > 0) || !std::isfinite(spacing))
         throw std::invalid_argument("Container::sampleWalls: spacing must be > 0");
@@ -142,11 +151,7 @@ public:
     }
 
     bool constrain(const Vec3& xOld, Vec3& x, Vec3& v) const override {
-        if (!x.allFinite()) {
-            x = xOld;
-            v.setZero();
-            return true;
-        }
+        if (parkIfNonFinite(xOld, x, v)) return true;
         bool corrected = false;
         for (int a = 0; a < 3; ++a) corrected |= clampAxis(x[a], v[a], loF_[a], hiF_[a]);
         return corrected;
@@ -204,11 +209,7 @@ public:
     }
 
     bool constrain(const Vec3& xOld, Vec3& x, Vec3& v) const override {
-        if (!x.allFinite()) {
-            x = xOld;
-            v.setZero();
-            return true;
-        }
+        if (parkIfNonFinite(xOld, x, v)) return true;
         bool corrected = false;
         if (x.z() < floorF_) {
             x.z() = floorF_;
@@ -595,11 +596,7 @@ public:
     }
 
     bool constrain(const Vec3& xOld, Vec3& x, Vec3& v) const override {
-        if (!x.allFinite()) {
-            x = xOld;
-            v.setZero();
-            return true;
-        }
+        if (parkIfNonFinite(xOld, x, v)) return true;
         bool corrected = clampBox(x, v);
         const Vec3d p = xOld.cast<double>() - origin_;
         // Each round either finds the motion clear or slides the end point onto the

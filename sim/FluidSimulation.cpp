@@ -27,6 +27,10 @@ constexpr size_t kGrain = 256;
 /// SPlisHSPlasH tuned for water in SI units.
 constexpr Real kCohesionWeight = 1000;
 
+/// Fewer neighbours than this (fluid and wall) marks a particle near the free surface,
+/// where the divergence solve leaves it alone (SPlisHSPlasH's threshold for 3-D).
+constexpr uint32_t kDenseNeighborhood = 20;
+
 /// Wall pressure (Akinci 2012): a wall particle pushes a fluid particle with the fluid
 /// particle's own pressure, p_i / rho_i^2 (not the symmetric pair sum). A mirrored
 /// 2 p_i pushes twice as hard and fixes the pressure of the first layer next to a wall,
@@ -596,8 +600,7 @@ int FluidSimulation::relaxedJacobi(std::vector<Real>& kappa, const std::vector<R
             const Real r = source[i] - Ap;
             kappa[i] = std::max(kappa[i] - Real(0.5) * r * alpha_[i] * invHp, Real(0));
             // Sparse particles (near the free surface) do not count toward divergence error.
-            const bool counts = densitySolve || (fluidNbr_.offset[i + 1] - fluidNbr_.offset[i]) +
-                                                            (boundaryNbr_.offset[i + 1] - boundaryNbr_.offset[i]) >= 20;
+            const bool counts = densitySolve || neighborCount(i) >= kDenseNeighborhood;
             residual[i] = counts ? std::max(-r, Real(0)) : 0;
         });
         err = deterministicSum(n, [&](size_t i) { return double(residual[i]); }) / double(std::max<size_t>(n, 1));
@@ -610,21 +613,29 @@ int FluidSimulation::relaxedJacobi(std::vector<Real>& kappa, const std::vector<R
     return it;
 }
 
+Real FluidSimulation::densityRate(size_t i) const {
+    // D(rho / rho0)/Dt = sum_j V (v_i - v_j) . grad W_ij + sum_b V_b v_i . grad W_ib
+    // (walls are at rest).
+    Real rate = 0;
+    for (uint32_t k = fluidNbr_.offset[i]; k < fluidNbr_.offset[i + 1]; ++k)
+        rate += (v_[i] - v_[fluidNbr_.index[k]]).dot(fluidNbr_.gradW[k]);
+    rate *= Real(volume_);
+    for (uint32_t k = boundaryNbr_.offset[i]; k < boundaryNbr_.offset[i + 1]; ++k)
+        rate += bVolume_[boundaryNbr_.index[k]] * v_[i].dot(boundaryNbr_.gradW[k]);
+    return rate;
+}
+
+uint32_t FluidSimulation::neighborCount(size_t i) const {
+    return (fluidNbr_.offset[i + 1] - fluidNbr_.offset[i]) + (boundaryNbr_.offset[i + 1] - boundaryNbr_.offset[i]);
+}
+
 void FluidSimulation::solveDivergence(double dt) {
     const size_t n = x_.size();
-    const Real V = Real(volume_);
     source_.resize(n);
     forEachParticle(n, [&](size_t i) {
-        Real div = 0;
-        for (uint32_t k = fluidNbr_.offset[i]; k < fluidNbr_.offset[i + 1]; ++k)
-            div += (v_[i] - v_[fluidNbr_.index[k]]).dot(fluidNbr_.gradW[k]);
-        div *= V;
-        for (uint32_t k = boundaryNbr_.offset[i]; k < boundaryNbr_.offset[i + 1]; ++k)
-            div += bVolume_[boundaryNbr_.index[k]] * v_[i].dot(boundaryNbr_.gradW[k]);
-        const uint32_t nb = (fluidNbr_.offset[i + 1] - fluidNbr_.offset[i]) +
-                            (boundaryNbr_.offset[i + 1] - boundaryNbr_.offset[i]);
+        Real div = densityRate(i);
         // Only compression is corrected, and not at the sparse free surface.
-        if (nb < 20 || div < 0) div = 0;
+        if (neighborCount(i) < kDenseNeighborhood || div < 0) div = 0;
         source_[i] = -div;
         // Warm start from the previous step's solution (stored times dt).
         kappaV_[i] = div > 0 ? Real(0.5) * std::min(kappaV_[i], Real(0.5)) / Real(dt) : 0;
@@ -640,19 +651,12 @@ void FluidSimulation::solveDivergence(double dt) {
 
 void FluidSimulation::solveDensity(double dt) {
     const size_t n = x_.size();
-    const Real V = Real(volume_);
     const Real rho0 = Real(rho0_);
     const Real h2 = Real(dt * dt);
     source_.resize(n);
     forEachParticle(n, [&](size_t i) {
-        Real delta = 0;
-        for (uint32_t k = fluidNbr_.offset[i]; k < fluidNbr_.offset[i + 1]; ++k)
-            delta += (v_[i] - v_[fluidNbr_.index[k]]).dot(fluidNbr_.gradW[k]);
-        delta *= V;
-        for (uint32_t k = boundaryNbr_.offset[i]; k < boundaryNbr_.offset[i + 1]; ++k)
-            delta += bVolume_[boundaryNbr_.index[k]] * v_[i].dot(boundaryNbr_.gradW[k]);
         // Predicted density; expansion is left alone (free surface).
-        const Real predicted = std::max(rho_[i] / rho0 + Real(dt) * delta, Real(1));
+        const Real predicted = std::max(rho_[i] / rho0 + Real(dt) * densityRate(i), Real(1));
         source_[i] = 1 - predicted;
         // Warm start from half the previous step's pressure (as SPlisHSPlasH does: a full
         // restart overshoots). Starting from the pressure, which every frame file stores,

@@ -95,6 +95,8 @@ private:
     int relaxedJacobi(std::vector<Real>& kappa, const std::vector<Real>& source, double hPow,
                       double eta, int minIterations, bool densitySolve);
     void pressureAccelerations(const std::vector<Real>& kappa);
+    Real densityRate(size_t i) const;      ///< D(rho/rho0)/Dt from the current velocities [1/s]
+    uint32_t neighborCount(size_t i) const; ///< fluid plus wall neighbours
     void integratePositions(double dt);
 
     SimScene scene_;
