@@ -24,16 +24,19 @@ int main(int argc, char** argv) {
         ->type_name("KEY=VALUE");
     app.add_option("--max-frames", opt.maxFrames, "stop after writing frame N (N frames after the initial one)")
         ->check(CLI::NonNegativeNumber);
-    app.add_flag("--resume", opt.resume, "continue from the last complete frame in the output directory");
-    app.add_flag("--overwrite", opt.overwrite, "delete frames already in the output directory and start over");
+    auto* resume = app.add_flag("--resume", opt.resume, "continue from the last complete frame in the output directory");
+    app.add_flag("--overwrite", opt.overwrite, "delete frames already in the output directory and start over")
+        ->excludes(resume);
     app.add_flag("--quiet,-q", opt.quiet, "no progress lines on stderr");
     app.add_option("--threads", threads, "worker threads (default: sim.threads, 0 = all cores)")
         ->check(CLI::NonNegativeNumber);
     try {
         app.parse(argc, argv);
+    } catch (const CLI::CallForHelp& e) {
+        return app.exit(e);
     } catch (const CLI::ParseError& e) {
-        const int code = app.exit(e);
-        return code == 0 ? kExitOk : kExitBadInput;
+        std::cerr << "ferro-sim: error: " << e.what() << " (see --help)\n";
+        return kExitBadInput;
     }
 
     try {

@@ -97,6 +97,8 @@ TEST_CASE("ferro-sim rejects bad input with one line and exit code 2", "[cli]") 
         {"--set sim.solver=magic", "sim.solver"},
         {"--set fluid.block.0.min=[-1.0,0.0,0.0]", "outside the container"},
         {"--set shot.fps=fast", "shot.fps"},
+        {"--resume --overwrite", "--resume excludes --overwrite"},
+        {"--max-frames -3", "--max-frames"},
     };
     for (const Case& c : cases) {
         const Result r = run(kSim + " " + example("dam_break.toml") + " --out " + dir.string() + " " + c.args);
