@@ -560,7 +560,7 @@ void FluidSimulation::stepWCSPH(double dt) {
 }
 
 void FluidSimulation::pressureAccelerations(const std::vector<Real>& kappa) {
-    // a_i = -sum_j V (kappa_i + kappa_j) grad W_ij - sum_b V_b 2 kappa_i grad W_ib, where
+    // a_i = -sum_j V (kappa_i + kappa_j) grad W_ij - sum_b V_b kWallMirror kappa_i grad W_ib, where
     // kappa = p / rho^2 in units normalized by rho0 (Bender & Koschier 2017).
     const Real V = Real(volume_);
     forEachParticle(x_.size(), [&](size_t i) {
@@ -584,7 +584,7 @@ int FluidSimulation::relaxedJacobi(std::vector<Real>& kappa, const std::vector<R
     const size_t n = x_.size();
     const Real V = Real(volume_);
     const Real hp = Real(hPow), invHp = Real(1 / hPow);
-    std::vector<Real>& residual = div_;
+    std::vector<Real>& residual = residual_;
     residual.resize(n);
     int it = 0;
     double err = 0;

@@ -112,7 +112,7 @@ private:
 
     // Fluid particles, sorted by (cell, id).
     std::vector<Vec3> x_, v_, a_, xOld_;
-    std::vector<Real> rho_, p_, alpha_, kappa_, kappaV_, source_, div_;
+    std::vector<Real> rho_, p_, alpha_, kappa_, kappaV_, source_, residual_;
     std::vector<Vec3> normal_;
     std::vector<uint32_t> id_;
     std::vector<uint16_t> boundaryCount_;
