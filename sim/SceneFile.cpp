@@ -9,6 +9,7 @@
 #include <cstdint>
 #include <cstdio>
 #include <filesystem>
+#include <limits>
 #include <set>
 #include <sstream>
 
@@ -535,7 +536,7 @@ std::string SceneDocument::fingerprint() const
 const std::vector<std::string>& knownSceneSections()
 {
     static const std::vector<std::string> sections = {
-        "shot", "fluid", "container", "sim", "magnet", "magnets", "magnetization", "surface", "spikes", "render"};
+        "shot", "fluid", "container", "sim", "magnets", "magnetization", "surface", "spikes", "render"};
     return sections;
 }
 
@@ -680,7 +681,94 @@ SolverParams parseSolver(const SceneDocument& doc)
     return p;
 }
 
+// The strength key is named for what it is for each kind, in the magnet and in its keys.
+const char* strengthKey(Magnet::Kind kind)
+{
+    switch (kind) {
+    case Magnet::Kind::Dipole: return "moment";        // [A m^2]
+    case Magnet::Kind::Bar: return "pole_strength";    // [A m]
+    case Magnet::Kind::Uniform: return "field";        // [A/m]
+    case Magnet::Kind::Loop: return "current";         // [A]
+    }
+    return "strength";
+}
+
+Vec3d unitDirection(const TableReader& r, const std::string& key, const Vec3d& def)
+{
+    Vec3d d = r.vec3(key, def);
+    if (!(d.norm() > 0))
+        r.fail(key, "must be a non-zero vector (got " + formatVec(d) + ")");
+    return d.normalized();
+}
+
+MagnetTrack parseMagnet(const TableReader& r)
+{
+    MagnetTrack track;
+    Magnet& m = track.base;
+    const std::string kind = r.choice("kind", {"dipole", "bar", "uniform", "loop"}, "dipole");
+    m.kind = kind == "bar" ? Magnet::Kind::Bar
+           : kind == "uniform" ? Magnet::Kind::Uniform
+           : kind == "loop" ? Magnet::Kind::Loop : Magnet::Kind::Dipole;
+    const std::string sKey = strengthKey(m.kind);
+    if (m.kind != Magnet::Kind::Uniform)
+        m.position = r.vec3("position", m.position);
+    m.direction = unitDirection(r, "direction", m.direction);
+    m.strength = r.number(sKey, 0.0);
+    if (m.kind == Magnet::Kind::Bar)
+        m.length = requiredPositive(r, "length");
+    if (m.kind == Magnet::Kind::Loop)
+        m.radius = requiredPositive(r, "radius");
+    if (m.kind != Magnet::Kind::Uniform)
+        m.softening = r.nonNegative("softening", m.softening);
+    double lastTime = -std::numeric_limits<double>::infinity();
+    for (const TableReader& k : r.tables("keys")) {
+        MagnetKeyframe key;
+        key.time = k.nonNegative("time", 0.0);
+        if (!k.has("time"))
+            k.fail("time", "every [[magnets.keys]] needs a time");
+        if (key.time < lastTime)
+            k.fail("time", "keys must be in time order (got " + formatNumber(key.time) + " after " +
+                               formatNumber(lastTime) + ")");
+        lastTime = key.time;
+        key.position = m.kind != Magnet::Kind::Uniform ? k.vec3("position", m.position) : m.position;
+        key.direction = unitDirection(k, "direction", m.direction);
+        key.strength = k.number(sKey, m.strength);
+        k.finish();
+        track.keys.push_back(key);
+    }
+    r.finish();
+    return track;
+}
+
 } // namespace
+
+std::vector<MagnetTrack> parseMagnets(const SceneDocument& doc)
+{
+    std::vector<MagnetTrack> tracks;
+    for (const TableReader& r : TableReader(doc, doc.root(), "").tables("magnets"))
+        tracks.push_back(parseMagnet(r));
+    return tracks;
+}
+
+MagnetizationParams parseMagnetization(const SceneDocument& doc)
+{
+    TableReader r = doc.section("magnetization");
+    MagnetizationParams p;
+    p.susceptibility = r.nonNegative("susceptibility", p.susceptibility);
+    p.saturation = r.nonNegative("saturation", p.saturation);
+    const std::string solver = r.choice("solver", {"auto", "external", "direct", "tree"}, "auto");
+    p.solver = solver == "external" ? MagnetizationParams::Solver::External
+             : solver == "direct" ? MagnetizationParams::Solver::Direct
+             : solver == "tree" ? MagnetizationParams::Solver::Tree : MagnetizationParams::Solver::Auto;
+    p.tolerance = r.positive("tolerance", p.tolerance);
+    p.openingAngle = r.number("opening_angle", p.openingAngle);
+    if (!(p.openingAngle > 0 && p.openingAngle < 1.5))
+        r.fail("opening_angle", "must be in (0, 1.5) (got " + formatNumber(p.openingAngle) + ")");
+    p.resolveEvery = intInRange(r, "resolve_every", p.resolveEvery, 0, INT_MAX);
+    p.maxIterations = intInRange(r, "max_iterations", p.maxIterations, 1, 10000);
+    r.finish();
+    return p;
+}
 
 SimScene parseSimScene(const SceneDocument& doc)
 {
@@ -691,6 +779,8 @@ SimScene parseSimScene(const SceneDocument& doc)
     scene.fluid = parseFluid(doc);
     scene.container = parseContainer(doc);
     scene.solver = parseSolver(doc);
+    scene.magnets = parseMagnets(doc);
+    scene.magnetization = parseMagnetization(doc);
     return scene;
 }
 

@@ -103,6 +103,10 @@ const std::vector<std::string>& knownSceneSections();
 /// Parses the sections ferro-sim owns ([shot], [fluid], [container], [sim]) and validates
 /// them (positive densities and spacings, fluid inside the container, ...).
 SimScene parseSimScene(const SceneDocument& doc);
+/// [[magnets]] (with their [[magnets.keys]]) and [magnetization] alone, for later stages
+/// that evaluate the field (ferro-spikes, ferro-pov) without the rest of the sim scene.
+std::vector<MagnetTrack> parseMagnets(const SceneDocument& doc);
+MagnetizationParams parseMagnetization(const SceneDocument& doc);
 /// load + parseSimScene.
 SimScene loadSimScene(const std::string& path, const std::vector<std::string>& overrides = {});
 

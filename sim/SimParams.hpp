@@ -2,6 +2,7 @@
 // Plain parameter structs of a shot, in SI units. SceneFile.cpp is the one place that
 // fills them from a TOML scene file; every default here is the documented default of
 // the matching scene key (see examples/annotated.toml).
+#include "sim/MagnetField.hpp"
 #include "sim/Types.hpp"
 
 #include <string>
@@ -81,6 +82,23 @@ struct ShotParams {
     int frameCount() const { return static_cast<int>(duration * fps + 0.5); }
 };
 
+/// [magnetization]: how the fluid magnetizes (paper eq. 5 with Langevin saturation) and how
+/// the particle-particle field is computed. The solvers trade speed for accuracy:
+/// External ignores the particles' own field (exact as chi0 -> 0, O(N)), Direct sums all
+/// pairs (O(N^2), the reference), Tree is a Barnes-Hut octree (O(N log N), error set by the
+/// opening angle), Auto picks the cheapest whose estimated error is under `tolerance`.
+struct MagnetizationParams {
+    enum class Solver { External, Direct, Tree, Auto };
+    double susceptibility = 0.0;   ///< initial susceptibility chi0 (dimensionless); 0 = not magnetic
+    double saturation = 0.0;       ///< saturation magnetization Ms [A/m]; 0 = never saturates (M = chi0 H)
+    Solver solver = Solver::Auto;
+    double tolerance = 0.01;       ///< accepted relative RMS field error (auto's choice, re-solve trigger)
+    double openingAngle = 0.5;     ///< Barnes-Hut opening angle theta (cell size / distance)
+    int resolveEvery = 0;          ///< re-solve every K steps; 0 = when the field may have changed by > tolerance
+    int maxIterations = 50;        ///< self-consistency iterations per solve (direct, tree)
+    bool enabled() const { return susceptibility > 0; }
+};
+
 /// Everything ferro-sim needs to run a shot.
 struct SimScene {
     std::string path;                 ///< scene file it came from
@@ -88,6 +106,8 @@ struct SimScene {
     FluidParams fluid;
     ContainerParams container;
     SolverParams solver;
+    std::vector<MagnetTrack> magnets;   ///< [[magnets]], each with optional [[magnets.keys]]
+    MagnetizationParams magnetization;  ///< [magnetization]
 };
 
 } // namespace ferro
