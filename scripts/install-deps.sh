@@ -8,7 +8,7 @@ PACKAGES=(
   build-essential cmake
   libeigen3-dev libtbb-dev libboost-iostreams-dev libopenvdb-dev
   libcgal-dev libassimp-dev libtomlplusplus-dev libcli11-dev catch2
-  povray
+  povray parallel
 )
 
 missing=()
