@@ -1,0 +1,51 @@
+#include "povray/RenderParams.hpp"
+
+#include "sim/SceneFile.hpp"
+
+#include <climits>
+#include <cmath>
+#include <string>
+
+namespace ferro {
+
+namespace {
+
+int intInRange(const TableReader& r, const std::string& key, int def, long lo, long hi)
+{
+    const long v = r.integer(key, def);
+    if (v < lo || v > hi)
+        r.fail(key, "must be in [" + std::to_string(lo) + ", " + std::to_string(hi) + "] (got " +
+                        std::to_string(v) + ")");
+    return int(v);
+}
+
+} // namespace
+
+RenderParams parseRenderParams(const SceneDocument& doc)
+{
+    TableReader r = doc.section("render");
+    RenderParams p;
+    p.cameraPosition = r.vec3("camera_position", p.cameraPosition);
+    p.cameraTarget = r.vec3("camera_target", p.cameraTarget);
+    if (!((p.cameraTarget - p.cameraPosition).norm() > 0))
+        r.fail("camera_target", "must differ from render.camera_position");
+    // The image's up is +z (POV-Ray's sky), so the camera cannot look straight along z.
+    const Vec3d view = (p.cameraTarget - p.cameraPosition).normalized();
+    if (std::abs(view.z()) > 0.9999)
+        r.fail("camera_target", "the camera must not look straight up or down (the image's up is +z)");
+    p.cameraAngle = r.number("camera_angle", p.cameraAngle);
+    if (!(p.cameraAngle > 0 && p.cameraAngle < 180))
+        r.fail("camera_angle", "must be in (0, 180) degrees (got " + std::to_string(p.cameraAngle) + ")");
+    p.width = intInRange(r, "width", p.width, 1, 65535);
+    p.height = intInRange(r, "height", p.height, 1, 65535);
+    p.quality = intInRange(r, "quality", p.quality, 0, 11);
+    p.antialias = r.boolean("antialias", p.antialias);
+    p.antialiasThreshold = r.positive("antialias_threshold", p.antialiasThreshold);
+    p.antialiasDepth = intInRange(r, "antialias_depth", p.antialiasDepth, 1, 9);
+    p.magnetLength = r.positive("magnet_length", p.magnetLength);
+    p.magnetRadius = r.positive("magnet_radius", p.magnetRadius);
+    r.finish();
+    return p;
+}
+
+} // namespace ferro

@@ -1,0 +1,124 @@
+// ferro-pov: exports meshes as POV-Ray includes plus the shot's master scene, .ini files and
+// look template. Parses arguments and calls the ferro_pov library; nothing else lives here.
+#include "povray/PovExport.hpp"
+#include "sim/ParticleFile.hpp"
+#include "sim/SceneFile.hpp"
+#include "sim/ShotRunner.hpp"
+
+#include <CLI/CLI.hpp>
+#include <tbb/global_control.h>
+#include <tbb/parallel_for.h>
+
+#include <iostream>
+#include <memory>
+#include <regex>
+
+namespace {
+
+// "A:B" -> {A, B} with 0 <= A <= B; throws CLI::ValidationError.
+std::pair<int, int> parseRange(const std::string& text, const std::string& option)
+{
+    static const std::regex re(R"(\s*(\d+)\s*:\s*(\d+)\s*)");
+    std::smatch m;
+    if (!std::regex_match(text, m, re))
+        throw CLI::ValidationError(option, "expected FIRST:LAST (got '" + text + "')");
+    const int a = std::stoi(m[1]), b = std::stoi(m[2]);
+    if (b < a)
+        throw CLI::ValidationError(option, "LAST must be >= FIRST (got '" + text + "')");
+    return {a, b};
+}
+
+} // namespace
+
+int main(int argc, char** argv)
+{
+    using namespace ferro;
+    CLI::App app{"ferro-pov: writes a mesh as a POV-Ray mesh2 include (SHOTDIR/mesh_NNNN.inc) with its magnets\n"
+                 "(SHOTDIR/magnets_NNNN.inc), and the shot's shot.pov, render.ini, shot.ini and look.inc.\n"
+                 "  ferro-pov SPIKY.ply --scene S.toml --frame N --out SHOTDIR\n"
+                 "  ferro-pov 'spiky/spiky_{:04}.ply' --frames A:B --scene S.toml --out SHOTDIR\n"
+                 "  ferro-pov --scene S.toml --out SHOTDIR          (shot files only)\n"
+                 "Then: cd SHOTDIR && povray shot.ini +SF10 +EF20"};
+    std::string input, scenePath, outDir, framesText, shotFramesText;
+    std::vector<std::string> overrides;
+    int frame = -1, threads = 0;
+    bool forceTemplate = false, noShot = false, quiet = false;
+    app.add_option("mesh", input, "mesh file (PLY, OBJ, ...), or a pattern with {:04} / %04d together with --frames");
+    app.add_option("--scene,-s", scenePath, "scene file (TOML): [render], [container], [shot], [[magnets]]")->required();
+    app.add_option("--out,-o", outDir, "shot directory")->required();
+    auto* frameOpt = app.add_option("--frame", frame, "frame number of a single mesh (default: the mesh's `comment frame`)")
+                         ->check(CLI::NonNegativeNumber);
+    app.add_option("--frames", framesText, "frame range FIRST:LAST of a mesh pattern")->excludes(frameOpt);
+    app.add_option("--shot-frames", shotFramesText, "frame range of shot.ini (default: the whole shot, 0 .. duration*fps)");
+    app.add_flag("--no-shot", noShot, "write only the frame includes, not shot.pov, the .ini files or look.inc");
+    app.add_flag("--force-template", forceTemplate, "overwrite look.inc with a fresh template (discards edits)");
+    app.add_option("--set", overrides, "override a scene key: --set render.width=320")->type_name("KEY=VALUE");
+    app.add_option("--threads", threads, "worker threads for a frame range (0 = all cores)")->check(CLI::NonNegativeNumber);
+    app.add_flag("--quiet,-q", quiet, "no progress lines on stderr");
+
+    std::pair<int, int> frames{-1, -1}, shotFrames{-1, -1};
+    try {
+        app.parse(argc, argv);
+        if (!framesText.empty())
+            frames = parseRange(framesText, "--frames");
+        if (!shotFramesText.empty())
+            shotFrames = parseRange(shotFramesText, "--shot-frames");
+        if (!framesText.empty() && input.empty())
+            throw CLI::ValidationError("--frames", "needs a mesh pattern");
+        if (framesText.empty() && input.empty() && noShot)
+            throw CLI::ValidationError("--no-shot", "without a mesh there is nothing to write");
+    } catch (const CLI::CallForHelp& e) {
+        return app.exit(e);
+    } catch (const CLI::ParseError& e) {
+        std::cerr << "ferro-pov: error: " << e.what() << " (see --help)\n";
+        return kExitBadInput;
+    }
+
+    try {
+        std::unique_ptr<tbb::global_control> limit;
+        if (threads > 0)
+            limit = std::make_unique<tbb::global_control>(tbb::global_control::max_allowed_parallelism, size_t(threads));
+        const SceneDocument doc = SceneDocument::load(scenePath, overrides);
+        const PovExporter exporter(doc, outDir, shotFrames.first, shotFrames.second);
+        if (!input.empty() && frames.first >= 0) {
+            // Read every file first, so a missing frame fails the run before anything is written.
+            for (int f = frames.first; f <= frames.second; ++f)
+                if (!std::filesystem::exists(framePath(input, f)))
+                    throw MeshFileError(framePath(input, f) + ": no such file");
+            tbb::parallel_for(frames.first, frames.second + 1, [&](int f) {
+                exporter.exportFrameFile(framePath(input, f), f);
+                if (!quiet)
+                    std::cerr << "ferro-pov: frame " + std::to_string(f) + " -> " + exporter.meshIncludePath(f) + "\n";
+            });
+        } else if (!input.empty()) {
+            const TriangleMesh mesh = readMesh(input);
+            int f = frame;
+            if (f < 0) {
+                ParticleTable header;
+                header.comments = mesh.comments;
+                const double commented = header.commentNumber("frame", -1);
+                if (!(commented >= 0))
+                    throw MeshFileError(input + ": no `comment frame` in the file; give --frame N");
+                f = int(commented);
+            }
+            exporter.exportFrame(mesh, f);
+            if (!quiet)
+                std::cerr << "ferro-pov: frame " << f << " -> " << exporter.meshIncludePath(f) << "\n";
+        }
+        if (!noShot && exporter.writeShotFiles(forceTemplate) && !quiet)
+            std::cerr << "ferro-pov: wrote the look template " << outDir << "/look.inc\n";
+    } catch (const SceneError& e) {
+        std::cerr << "ferro-pov: error: " << e.what() << "\n";
+        return kExitBadInput;
+    } catch (const MeshFileError& e) {
+        std::cerr << "ferro-pov: error: " << e.what() << "\n";
+        return kExitBadInput;
+    } catch (const PovExportError& e) {
+        std::cerr << "ferro-pov: error: " << e.what() << "\n";
+        return kExitIoError;
+    } catch (const std::exception& e) {
+        std::cerr << "ferro-pov: error: " << e.what() << "\n";
+        return kExitFailure;
+    }
+    return kExitOk;
+}

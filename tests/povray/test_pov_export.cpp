@@ -1,0 +1,265 @@
+// ferro-pov: number formatting, the z-up -> y-up conversion, mesh2 and magnet includes, the
+// shot files, and real renders with the povray binary (POV-Ray parses every file we write).
+#include "PovTestUtil.hpp"
+
+#include "povray/PovExport.hpp"
+#include "povray/RenderParams.hpp"
+#include "sim/MagnetState.hpp"
+#include "sim/SceneFile.hpp"
+
+#include <catch2/catch.hpp>
+#include <Eigen/Geometry>
+#include <Eigen/LU>
+
+using namespace ferro;
+using namespace ferro::povtest;
+
+namespace {
+
+// The dish of examples/dish.toml, no magnets, small and quick; `extra` is appended.
+std::string dishScene(const std::string& extra = {})
+{
+    return R"(
+[shot]
+fps = 10
+duration = 0.5
+[[fluid.block]]
+shape = "cylinder"
+center = [0.0, 0.0, 0.0]
+radius = 0.05
+height = 0.01
+count = 500
+[container]
+type = "dish"
+center = [0.0, 0.0, 0.0]
+radius = 0.05
+height = 0.02
+)" + extra;
+}
+
+std::string format(double v, int decimals)
+{
+    std::string s;
+    appendNumber(s, v, decimals);
+    return s;
+}
+
+// Pixel (column, row) where Ferro point `p` appears for the camera of `r` in a W x H image:
+// POV-Ray's perspective camera with `angle` as the horizontal field of view and z (Ferro) up.
+std::pair<int, int> project(const RenderParams& r, const Vec3d& p, int width, int height)
+{
+    const Vec3d f = (r.cameraTarget - r.cameraPosition).normalized();
+    const Vec3d right = f.cross(Vec3d(0, 0, 1)).normalized(); // right-handed, z up
+    const Vec3d up = right.cross(f);
+    const Vec3d d = p - r.cameraPosition;
+    const double t = std::tan(r.cameraAngle * 3.14159265358979 / 360.0);
+    const double aspect = double(width) / height;
+    const double u = d.dot(right) / d.dot(f) / t;            // -1 .. 1 across the width
+    const double v = d.dot(up) / d.dot(f) / (t / aspect);    // -1 .. 1 up the height
+    return {int((u + 1) / 2 * width), int((1 - v) / 2 * height)};
+}
+
+} // namespace
+
+TEST_CASE("numbers are written with the fewest digits that keep the precision", "[pov]")
+{
+    CHECK(format(1.5, 3) == "1.5");
+    CHECK(format(3.0, 3) == "3");
+    CHECK(format(12.3456, 3) == "12.346");
+    CHECK(format(-0.002, 3) == "-0.002");
+    CHECK(format(-0.0004, 3) == "0");   // never "-0"
+    CHECK(format(0.0004, 3) == "0");
+    CHECK(format(-120.0, 4) == "-120");
+    CHECK(format(0.70710678, 4) == "0.7071");
+    CHECK(format(std::nan(""), 3) == "0");
+    std::string v;
+    appendVector(v, Vec3d(1, -2.5, 0.125), 3);
+    CHECK(v == "<1,-2.5,0.125>");
+}
+
+TEST_CASE("Ferro z-up metres map to POV-Ray y-up millimetres by a reflection", "[pov]")
+{
+    const Vec3d p = toPovPoint(Vec3d(0.001, 0.002, 0.003));
+    CHECK(p.x() == Approx(1.0));
+    CHECK(p.y() == Approx(3.0)); // Ferro's z (up) is POV-Ray's y (up)
+    CHECK(p.z() == Approx(2.0));
+    // The map's determinant is -1: it turns the right-handed frame into a left-handed one,
+    // which is what POV-Ray's is, so the picture is not mirrored (checked on a render below).
+    Eigen::Matrix3d m;
+    m << toPovDirection(Vec3d::UnitX()), toPovDirection(Vec3d::UnitY()), toPovDirection(Vec3d::UnitZ());
+    CHECK(m.determinant() == Approx(-1.0));
+}
+
+TEST_CASE("mesh2 include: counts, every vertex and normal, and an empty mesh", "[pov]")
+{
+    TriangleMesh tri;
+    tri.vertices = {Vec3(0, 0, 0), Vec3(0.01f, 0, 0), Vec3(0, 0.01f, 0.002f)};
+    tri.triangles = {{0, 1, 2}};
+    const std::string text = meshInclude(tri, 7);
+    CHECK(text.find("#declare FerroMeshTriangles = 1;") != std::string::npos);
+    CHECK(text.find("vertex_vectors { 3,\n<0,0,0>,\n<10,0,0>,\n<0,2,10>\n }") != std::string::npos);
+    // Normals computed from the triangle: Ferro (x,y,z) -> (x,z,y), the face faces +z.
+    CHECK(text.find("normal_vectors { 3,\n<0") != std::string::npos);
+    CHECK(text.find("face_indices { 1,\n<0,1,2>\n }") != std::string::npos);
+
+    const std::string empty = meshInclude(TriangleMesh{}, 3);
+    CHECK(empty.find("#declare FerroMeshTriangles = 0;") != std::string::npos);
+    CHECK(empty.find("FerroMesh =") == std::string::npos);
+
+    TriangleMesh bad = tri;
+    bad.triangles = {{0, 1, 5}};
+    CHECK_THROWS_AS(meshInclude(bad, 0), MeshFileError);
+}
+
+TEST_CASE("[render] defaults, overrides and unknown keys", "[pov]")
+{
+    const RenderParams def = parseRenderParams(SceneDocument::parse(dishScene(), "s.toml"));
+    CHECK(def.width == 640);
+    CHECK(def.cameraAngle == 40.0);
+    const RenderParams r = parseRenderParams(
+        SceneDocument::parse(dishScene("[render]\nwidth = 320\nheight = 200\nantialias = false\n"), "s.toml",
+                             {"render.camera_angle=30"}));
+    CHECK(r.width == 320);
+    CHECK(r.height == 200);
+    CHECK_FALSE(r.antialias);
+    CHECK(r.cameraAngle == 30.0);
+    CHECK_THROWS_WITH(parseRenderParams(SceneDocument::parse(dishScene("[render]\nwidht = 3\n"), "s.toml")),
+                      Catch::Contains("widht"));
+    CHECK_THROWS_WITH(parseRenderParams(SceneDocument::parse(dishScene("[render]\nquality = 12\n"), "s.toml")),
+                      Catch::Contains("render.quality"));
+    CHECK_THROWS_WITH(parseRenderParams(SceneDocument::parse(
+                          dishScene("[render]\ncamera_position = [0, 0, 1]\ncamera_target = [0, 0, 0]\n"), "s.toml")),
+                      Catch::Contains("straight"));
+
+    ShotDescription shot = describeShot(SceneDocument::parse(dishScene("[render]\nwidth = 320\n"), "s.toml"));
+    CHECK(shot.lastFrame == 5); // 0.5 s at 10 fps
+    CHECK(renderIni(shot).find("Width=320\n") != std::string::npos);
+    CHECK(shotIni(shot).find("Final_Frame=5\n") != std::string::npos);
+    CHECK(shotIni(shot).find("Final_Clock=0.5\n") != std::string::npos);
+    CHECK(masterScene(shot).find("#declare FerroDishRadius = 50;") != std::string::npos);
+}
+
+TEST_CASE("magnets come from the mesh header, else from the scene's tracks", "[pov]")
+{
+    const SceneDocument doc = SceneDocument::parse(dishScene(R"(
+[[magnets]]
+kind = "dipole"
+position = [0.0, 0.0, -0.08]
+moment = 1.5
+[[magnets.keys]]
+time = 0.0
+position = [0.0, 0.0, -0.08]
+[[magnets.keys]]
+time = 1.0
+position = [0.0, 0.0, -0.02]
+)"),
+                                                   "s.toml");
+    const std::vector<MagnetTrack> tracks = parseMagnets(doc);
+    TriangleMesh mesh;
+    // No header: the track at t = 1 s.
+    std::vector<Magnet> m = frameMagnets(mesh, tracks, 1.0);
+    REQUIRE(m.size() == 1);
+    CHECK(m[0].position.z() == Approx(-0.02));
+    // A header wins over the tracks.
+    ParticleTable header;
+    Magnet bar;
+    bar.kind = Magnet::Kind::Bar;
+    bar.position = Vec3d(0.01, 0, -0.03);
+    bar.strength = -2.0;
+    bar.length = 0.03;
+    writeMagnetComments(header, {bar});
+    mesh.comments = header.comments;
+    m = frameMagnets(mesh, tracks, 1.0);
+    REQUIRE(m.size() == 1);
+    CHECK(m[0].kind == Magnet::Kind::Bar);
+    CHECK(m[0].position.x() == Approx(0.01));
+
+    RenderParams render;
+    const std::string text = magnetInclude(m, render, 4, 0.4);
+    CHECK(text.find("#declare FerroMagnetCount = 1;") != std::string::npos);
+    CHECK(text.find("FerroMagnetKind = array[1] { \"bar\" }") != std::string::npos);
+    CHECK(text.find("FerroMagnetPosition = array[1] { <10,-30,0> }") != std::string::npos);
+    // Negative strength: the axis (south -> north) is flipped.
+    CHECK(text.find("FerroMagnetDirection = array[1] { <0,-1,0> }") != std::string::npos);
+    CHECK(text.find("FerroMagnetLength = array[1] { 30 }") != std::string::npos);
+
+    // No magnets anywhere: a count of zero and nothing else.
+    const std::string none = magnetInclude({}, render, 0, 0);
+    CHECK(none.find("#declare FerroMagnetCount = 0;") != std::string::npos);
+    CHECK(none.find("array") == std::string::npos);
+}
+
+TEST_CASE("povray renders an exported frame: dark fluid, bright background, not mirrored", "[pov][povray]")
+{
+    const fs::path dir = freshDir("render");
+    const SceneDocument doc = SceneDocument::parse(dishScene(R"(
+[[magnets]]
+kind = "dipole"
+position = [0.0, 0.0, -0.03]
+moment = 1.0
+[[magnets]]
+kind = "loop"
+position = [0.0, 0.0, -0.05]
+radius = 0.03
+current = 100.0
+)"),
+                                                   (dir / "scene.toml").string());
+    const PovExporter exporter(doc, dir.string());
+    exporter.writeShotFiles(false);
+    // A black ball to the right (+x) of the dish's centre and high above it.
+    const Vec3d ball(0.025, 0.0, 0.035);
+    exporter.exportFrame(sphereMesh(ball.cast<float>(), 0.012f), 2);
+    const int W = 96, H = 72;
+    const Result res = renderFrame(dir, 2, W, H, "frame");
+    INFO(res.out);
+    REQUIRE(res.code == 0);
+    const Image img = readPpm(dir / "frame.ppm");
+    REQUIRE(img.width == W);
+    REQUIRE(img.height == H);
+
+    const RenderParams render = exporter.shot().render;
+    const auto [col, row] = project(render, ball, W, H);
+    INFO("ball centre at pixel " << col << ", " << row);
+    // The ball is on the right half and the upper half: +x is right, +z is up.
+    CHECK(col > W / 2);
+    CHECK(row < H / 2);
+    CHECK(img.brightness(col, row, 1) < 0.12);                 // the fluid is black
+    // Its mirror image across the vertical centre line shows the set, not the fluid.
+    const auto [mcol, mrow] = project(render, Vec3d(-ball.x(), ball.y(), ball.z()), W, H);
+    CHECK(img.brightness(mcol, mrow, 1) > 0.25);
+    // The background (the image's top corners) is not dark.
+    CHECK(img.brightness(2, 2, 2) > 0.25);
+    CHECK(img.brightness(W - 3, 2, 2) > 0.25);
+}
+
+TEST_CASE("povray parses an empty frame and a frame without magnets", "[pov][povray]")
+{
+    const fs::path dir = freshDir("empty");
+    const SceneDocument doc = SceneDocument::parse(dishScene(), (dir / "scene.toml").string());
+    const PovExporter exporter(doc, dir.string());
+    exporter.writeShotFiles(false);
+    exporter.exportFrame(TriangleMesh{}, 0);
+    CHECK(slurp(dir / "magnets_0000.inc").find("FerroMagnetCount = 0;") != std::string::npos);
+    const Result res = renderFrame(dir, 0, 32, 24, "empty");
+    INFO(res.out);
+    CHECK(res.code == 0);
+    CHECK(readPpm(dir / "empty.ppm").brightness(16, 2, 1) > 0.25);
+}
+
+TEST_CASE("povray shot.ini renders a frame range through POV-Ray's animation options", "[pov][povray]")
+{
+    const fs::path dir = freshDir("animation");
+    const SceneDocument doc = SceneDocument::parse(dishScene(), (dir / "scene.toml").string());
+    const PovExporter exporter(doc, dir.string());
+    exporter.writeShotFiles(false);
+    for (int f = 0; f <= 5; ++f)
+        exporter.exportFrame(sphereMesh(Vec3(0, 0, 0.005f + 0.002f * f), 0.01f, 12, 6), f);
+    const Result res = run("cd '" + dir.string() + "' && povray shot.ini -D +W16 +H12 +SF2 +EF3");
+    INFO(res.out);
+    REQUIRE(res.code == 0);
+    // Final_Frame = 5 has one digit, so POV-Ray names the frames shot_2.png, shot_3.png.
+    CHECK(fs::exists(dir / "frames" / "shot_2.png"));
+    CHECK(fs::exists(dir / "frames" / "shot_3.png"));
+    CHECK_FALSE(fs::exists(dir / "frames" / "shot_1.png"));
+    CHECK_FALSE(fs::exists(dir / "frames" / "shot_4.png"));
+}
