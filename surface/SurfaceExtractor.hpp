@@ -1,0 +1,48 @@
+#pragma once
+// From particle positions to a closed, outward-oriented triangle mesh of the fluid surface.
+//
+// Pipeline: density kernels (DensityKernels.hpp) -> our sparse rasterizer into an OpenVDB
+// FloatGrid (only leaves that some kernel reaches exist: never a dense box) -> optional
+// Gaussian smoothing -> openvdb::tools::volumeToMesh at the iso level -> triangles with
+// area-weighted vertex normals. The OpenVdb method replaces the first two steps by
+// openvdb::tools::ParticlesToLevelSet (spheres of one spacing radius).
+// OpenVDB stays inside SurfaceExtractor.cpp.
+#include "surface/SurfaceParams.hpp"
+#include "surface/TriangleMesh.hpp"
+
+#include "sim/Types.hpp"
+
+#include <stdexcept>
+#include <string>
+#include <vector>
+
+namespace ferro {
+
+/// Input the extractor cannot mesh (non-finite positions, a grid too large to index).
+class SurfaceError : public std::runtime_error {
+public:
+    using std::runtime_error::runtime_error;
+};
+
+/// Where the time of one extraction went, and what it produced.
+struct SurfaceStats {
+    double spacing = 0, voxelSize = 0, isoLevel = 0, offset = 0;
+    size_t leaves = 0, activeVoxels = 0;
+    double kernelSeconds = 0, rasterSeconds = 0, meshSeconds = 0;
+};
+
+/// Meshes the fluid described by `positions` [m]. `spacing` > 0 is the particle spacing
+/// (0 = params.spacing, else estimated). Empty input gives an empty mesh; a single particle
+/// a small closed blob. If `vdbPath` is not empty, the surface is also written there as a
+/// narrow-band level set (OpenVDB .vdb, grid "surface", atomically).
+/// Throws SurfaceError for bad positions, MeshFileError when the .vdb cannot be written.
+TriangleMesh extractSurface(const std::vector<Vec3>& positions, const SurfaceParams& params,
+                            double spacing = 0, const std::string& vdbPath = {},
+                            SurfaceStats* stats = nullptr);
+
+/// The density field of the kernels sampled into a sparse grid and meshed, without the
+/// kernel step (for tests of the rasterizer against densityAt). Returns the sum of all
+/// voxel values times the voxel volume (= total kernel volume if nothing was lost).
+double rasterizedVolume(const std::vector<struct DensityKernel>& kernels, double voxelSize);
+
+} // namespace ferro

@@ -1,0 +1,50 @@
+// [surface] section of a scene file (see SurfaceParams.hpp).
+#include "surface/SurfaceParams.hpp"
+
+#include "sim/SceneFile.hpp"
+
+namespace ferro {
+
+const char* methodName(SurfaceMethod m) {
+    switch (m) {
+    case SurfaceMethod::Anisotropic: return "anisotropic";
+    case SurfaceMethod::Isotropic: return "isotropic";
+    case SurfaceMethod::OpenVdb: return "openvdb";
+    }
+    return "?";
+}
+
+SurfaceParams parseSurfaceParams(const SceneDocument& doc, const SurfaceParams& defaults) {
+    SurfaceParams p = defaults;
+    TableReader r = doc.section("surface");
+    const std::string method =
+        r.choice("method", {"anisotropic", "isotropic", "openvdb"}, methodName(defaults.method));
+    p.method = method == "anisotropic" ? SurfaceMethod::Anisotropic
+             : method == "isotropic"   ? SurfaceMethod::Isotropic
+                                       : SurfaceMethod::OpenVdb;
+    p.spacing = r.nonNegative("spacing", p.spacing);
+    p.voxelSize = r.nonNegative("voxel_size", p.voxelSize);
+    p.kernelRadius = r.positive("kernel_radius", p.kernelRadius);
+    p.neighborRadius = r.positive("neighbor_radius", p.neighborRadius);
+    p.kr = r.number("k_r", p.kr);
+    if (!(p.kr >= 1)) r.fail("k_r", "must be >= 1");
+    p.ks = r.nonNegative("k_s", p.ks);
+    p.kn = r.positive("k_n", p.kn);
+    const long nEps = r.integer("n_eps", p.nEps);
+    if (nEps < 0 || nEps > 100000) r.fail("n_eps", "must be in 0..100000");
+    p.nEps = int(nEps);
+    p.lambda = r.number("lambda", p.lambda);
+    if (!(p.lambda >= 0 && p.lambda <= 1)) r.fail("lambda", "must be in [0, 1]");
+    p.isoLevel = r.positive("iso_level", p.isoLevel);
+    p.volumeCorrection = r.boolean("volume_correction", p.volumeCorrection);
+    p.adaptivity = r.number("adaptivity", p.adaptivity);
+    if (!(p.adaptivity >= 0 && p.adaptivity <= 1)) r.fail("adaptivity", "must be in [0, 1]");
+    const long smoothing = r.integer("smoothing", p.smoothing);
+    if (smoothing < 0 || smoothing > 100) r.fail("smoothing", "must be in 0..100");
+    p.smoothing = int(smoothing);
+    p.format = r.string("format", p.format);
+    r.finish();
+    return p;
+}
+
+} // namespace ferro
