@@ -1,0 +1,130 @@
+# shot.mk: make targets of one shot, one file per frame and stage. Frames are independent
+# after the simulation, so `make -j` (or scripts/farm.sh over several machines) runs them in
+# parallel, and make re-runs only what is stale:
+#
+#   particles/particles_NNNN.ply -> surface/surface_NNNN.ply -> spiky/spiky_NNNN.ply
+#     -> shot/mesh_NNNN.inc (+ magnets_NNNN.inc) -> png/frame_NNNN.png -> shot.mp4, shot.gif
+#
+# Every stage also depends on a stamp of the scene sections it reads, .scene/<stage>.toml,
+# rewritten (at every make run) only when that section's text changes: editing [render]
+# re-renders every frame but re-meshes none, editing [surface] re-meshes, editing [sim] or the
+# magnets re-simulates. Editing shot/look.inc re-renders.
+#
+# OUTDIR/Makefile, written by scripts/shot.sh, sets these and includes this file:
+#   SCENE        scene file (absolute path)
+#   FERRO_BIN    directory of the ferro-* executables (absolute path)
+#   SHOT_FIRST, SHOT_LAST   the shot's frames (the range of shot/shot.ini and of the video)
+#   SPIKES       1: run ferro-spikes between ferro-surface and ferro-pov; 0: export the surface
+#   MAX_FRAMES   optional: simulate only up to this frame (ferro-sim --max-frames)
+#
+# Targets (run in OUTDIR, or make -C OUTDIR ...):
+#   make -j2                     everything: all frames up to PNG, then the video
+#   make -j2 FIRST=10 LAST=20    frames 10..20 up to PNG (target `frames`)
+#   make prepare                 the simulation and the shot files (shot.pov, .ini, look.inc)
+#   make video                   shot.mp4 and shot.gif from png/ (needs ffmpeg)
+#   make clean-renders           delete the PNGs (keeps particles and meshes)
+
+SHELL := /bin/bash
+.DELETE_ON_ERROR:
+.SUFFIXES:
+# Intermediate files (meshes between stages) are kept: they are the point of the pipeline.
+.SECONDARY:
+
+SHOT_FIRST ?= 0
+FIRST ?= $(SHOT_FIRST)
+LAST ?= $(SHOT_LAST)
+SPIKES ?= 0
+POVRAY ?= povray
+FFMPEG ?= ffmpeg
+# Extra POV-Ray options for every frame, e.g. POVRAY_ARGS='+W320 +H240' for a preview.
+POVRAY_ARGS ?=
+
+FRAMES := $(shell seq -f %04g $(FIRST) $(LAST))
+SHOT_FRAMES := $(shell seq -f %04g $(SHOT_FIRST) $(SHOT_LAST))
+
+# ---- Scene stamps ---------------------------------------------------------------------------
+# awk: print the lines of the scene's top-level sections named in `want` ([name], [[name]],
+# [name.sub] ...), without comment and blank lines. Keys before any header count for all.
+SECTION_AWK := BEGIN { n = split(want, w, " "); for (i = 1; i <= n; i++) keep[w[i]] = 1; on = 1 } \
+  /^[ \t]*\[/ { h = $$0; sub(/^[ \t]*\[+[ \t]*/, "", h); sub(/[ \t]*\].*$$/, "", h); split(h, p, "."); gsub(/"/, "", p[1]); on = (p[1] in keep) } \
+  /^[ \t]*(\#|$$)/ { next } \
+  on { print }
+# $(call scene_stamp,name,sections,extra line): refresh .scene/name.toml if its text changed.
+scene_stamp = $(shell mkdir -p .scene && t=.scene/.$(1).$$$$ && \
+  awk -v want='$(2)' '$(SECTION_AWK)' '$(SCENE)' > $$t && echo '$(3)' >> $$t && \
+  if cmp -s $$t .scene/$(1).toml; then rm -f $$t; else mv -f $$t .scene/$(1).toml; fi)
+$(call scene_stamp,sim,shot fluid container sim magnets magnetization,max_frames=$(MAX_FRAMES))
+$(call scene_stamp,surface,surface,)
+$(call scene_stamp,spikes,spikes magnets magnetization,)
+$(call scene_stamp,export,magnets shot,)
+$(call scene_stamp,render,render container shot magnets,shot_frames=$(SHOT_FIRST):$(SHOT_LAST))
+
+# 0010 -> 10 (a leading zero would read as octal to some parsers).
+frame_number = $$((10\#$(1)))
+
+.PHONY: all frames prepare video clean-renders
+all: frames $(if $(shell command -v $(FFMPEG)),video)
+frames: $(FRAMES:%=png/frame_%.png)
+prepare: particles/.complete shot/shot.pov shot/look.inc
+
+# ---- Simulation: one run writes every frame ---------------------------------------------------
+particles/.complete: .scene/sim.toml
+	$(FERRO_BIN)/ferro-sim '$(SCENE)' --out particles --overwrite --quiet $(if $(MAX_FRAMES),--max-frames $(MAX_FRAMES))
+	touch $@
+
+# A particle file is made by the simulation; after a new run it is touched so the later stages
+# see it as new. A frame the simulation never reached is an error, not an empty frame.
+particles/particles_%.ply: particles/.complete
+	@test -f $@ || { echo "shot.mk: $@ is missing: the simulation stopped before frame $*" >&2; exit 1; }
+	@touch $@
+
+# ---- Per frame ----------------------------------------------------------------------------------
+surface/surface_%.ply: particles/particles_%.ply .scene/surface.toml
+	@mkdir -p surface
+	$(FERRO_BIN)/ferro-surface $< --scene '$(SCENE)' --out $@ --quiet
+
+spiky/spiky_%.ply: surface/surface_%.ply particles/particles_%.ply .scene/spikes.toml
+	@mkdir -p spiky
+	$(FERRO_BIN)/ferro-spikes $< --particles particles/particles_$*.ply --scene '$(SCENE)' --out $@ --quiet
+
+ifeq ($(SPIKES),1)
+EXPORTED_MESH := spiky/spiky_%.ply
+else
+EXPORTED_MESH := surface/surface_%.ply
+endif
+
+# Both includes come from one ferro-pov run (a grouped pattern rule).
+shot/mesh_%.inc shot/magnets_%.inc: $(EXPORTED_MESH) .scene/export.toml
+	$(FERRO_BIN)/ferro-pov $< --scene '$(SCENE)' --frame $(call frame_number,$*) --out shot --no-shot --quiet
+
+# The shot files. ferro-pov rewrites shot.pov and the .ini files only when their text changes;
+# the touch marks them as made from the current [render].
+shot/shot.pov: .scene/render.toml
+	$(FERRO_BIN)/ferro-pov --scene '$(SCENE)' --out shot --shot-frames $(SHOT_FIRST):$(SHOT_LAST) --quiet
+	touch $@
+# The look template is written only when missing; after that it is the artists' file.
+shot/look.inc: | shot/shot.pov
+	$(FERRO_BIN)/ferro-pov --scene '$(SCENE)' --out shot --shot-frames $(SHOT_FIRST):$(SHOT_LAST) --quiet
+
+png/frame_%.png: shot/mesh_%.inc shot/magnets_%.inc shot/shot.pov shot/look.inc
+	@mkdir -p png shot/log
+	cd shot && $(POVRAY) render.ini -D Declare=FerroFrame=$(call frame_number,$*) \
+	  +O../png/.frame_$*.tmp.png $(POVRAY_ARGS) > log/frame_$*.log 2>&1 \
+	  || { tail -n 20 log/frame_$*.log >&2; rm -f ../png/.frame_$*.tmp.png; exit 1; }
+	mv -f png/.frame_$*.tmp.png $@
+
+# ---- Video --------------------------------------------------------------------------------------
+FPS = $(shell sed -n 's/^\#declare FerroFps = \(.*\);/\1/p' shot/shot.pov)
+video: shot.mp4 shot.gif
+shot.mp4: $(SHOT_FRAMES:%=png/frame_%.png)
+	$(FFMPEG) -y -loglevel error -framerate $(FPS) -start_number $(SHOT_FIRST) -i png/frame_%04d.png \
+	  -vf 'scale=trunc(iw/2)*2:trunc(ih/2)*2' -c:v libx264 -pix_fmt yuv420p -crf 20 .shot.tmp.mp4
+	mv -f .shot.tmp.mp4 $@
+shot.gif: $(SHOT_FRAMES:%=png/frame_%.png)
+	$(FFMPEG) -y -loglevel error -framerate $(FPS) -start_number $(SHOT_FIRST) -i png/frame_%04d.png \
+	  -vf 'fps=15,scale=min(iw\,480):-1:flags=lanczos,split[a][b];[a]palettegen=stats_mode=diff[p];[b][p]paletteuse=dither=bayer:bayer_scale=3' \
+	  -loop 0 .shot.tmp.gif
+	mv -f .shot.tmp.gif $@
+
+clean-renders:
+	rm -f png/frame_*.png shot.mp4 shot.gif

@@ -1,0 +1,95 @@
+#!/usr/bin/env bash
+# shot.sh: runs a whole shot: simulate, then per frame surface, spikes, POV-Ray export and
+# render, then a video (shot.mp4) and a GIF (shot.gif) when ffmpeg is installed.
+#
+#   scripts/shot.sh SCENE.toml OUTDIR [--frames A:B] [--max-frames N] [-j JOBS] [--no-video]
+#
+# It writes OUTDIR/Makefile (see scripts/shot.mk) and runs make in OUTDIR, so a second run
+# re-does only what changed (a scene section, the look, a deleted file), and
+# `make -C OUTDIR -j2 FIRST=10 LAST=20` re-renders part of a shot by hand. ferro-spikes runs
+# when it is built and the scene has [[magnets]]; otherwise the surface goes straight to
+# ferro-pov.
+#   --frames A:B      render only frames A..B (the simulation still starts at frame 0)
+#   --max-frames N    simulate and render only frames 0..N (a preview of a long shot)
+#   -j JOBS           frames in flight (default: the number of cores)
+#   --no-video        stop after the PNGs
+# Environment: FERRO_BIN (default: build/bin of this checkout), POVRAY_ARGS (extra povray
+# options per frame, e.g. '+W320 +H240').
+set -euo pipefail
+root="$(cd "$(dirname "$0")/.." && pwd)"
+usage() { sed -n '2,20s/^# \{0,1\}//p' "$0"; }
+die() { echo "shot.sh: error: $*" >&2; exit 2; }
+
+scene="" out="" frames="" max_frames="" jobs="$(nproc)" video=1
+while [[ $# -gt 0 ]]; do
+  case "$1" in
+    --frames) frames="${2:?--frames needs A:B}"; shift 2 ;;
+    --max-frames) max_frames="${2:?--max-frames needs N}"; shift 2 ;;
+    -j) jobs="${2:?-j needs a number}"; shift 2 ;;
+    -j*) jobs="${1#-j}"; shift ;;
+    --no-video) video=0; shift ;;
+    -h|--help) usage; exit 0 ;;
+    -*) die "unknown option $1 (see --help)" ;;
+    *) if [[ -z "$scene" ]]; then scene="$1"; elif [[ -z "$out" ]]; then out="$1"; else die "unexpected argument $1"; fi; shift ;;
+  esac
+done
+[[ -n "$scene" && -n "$out" ]] || { usage >&2; exit 2; }
+[[ -f "$scene" ]] || die "$scene: no such scene file"
+[[ -z "$max_frames" || "$max_frames" =~ ^[0-9]+$ ]] || die "--max-frames needs a number (got '$max_frames')"
+[[ -z "$frames" || "$frames" =~ ^[0-9]+:[0-9]+$ ]] || die "--frames needs FIRST:LAST (got '$frames')"
+[[ "$jobs" =~ ^[1-9][0-9]*$ ]] || die "-j needs a positive number (got '$jobs')"
+
+bin="${FERRO_BIN:-$root/build/bin}"
+bin="$(cd "$bin" 2>/dev/null && pwd)" || die "no Ferro executables in ${FERRO_BIN:-$root/build/bin} (run scripts/build.sh)"
+for stage in ferro-sim ferro-surface ferro-pov; do
+  [[ -x "$bin/$stage" ]] || die "$bin/$stage is missing (run scripts/build.sh)"
+done
+command -v povray >/dev/null || die "povray is not installed (scripts/install-deps.sh)"
+scene="$(cd "$(dirname "$scene")" && pwd)/$(basename "$scene")"
+mkdir -p "$out"
+out="$(cd "$out" && pwd)"
+
+# The shot's frames: ferro-pov validates the scene and writes shot.ini for the whole shot
+# (into a scratch directory: the shot's own files are make's business).
+probe="$(mktemp -d)"
+trap 'rm -rf "$probe"' EXIT
+"$bin/ferro-pov" --scene "$scene" --out "$probe" --quiet
+last="$(sed -n 's/^Final_Frame=//p' "$probe/shot.ini")"
+if [[ -n "$max_frames" && "$max_frames" -lt "$last" ]]; then last="$max_frames"; fi
+first_render=0 last_render="$last"
+if [[ -n "$frames" ]]; then
+  first_render="${frames%%:*}" last_render="${frames##*:}"
+  (( first_render <= last_render )) || die "--frames $frames: FIRST must be <= LAST"
+  (( last_render <= last )) || die "--frames $frames: the shot ends at frame $last"
+fi
+
+# Spikes need ferro-spikes and a magnet.
+spikes=0
+if [[ -x "$bin/ferro-spikes" ]] && grep -Eq '^[[:space:]]*\[\[[[:space:]]*magnets[[:space:]]*\]\]' "$scene"; then
+  spikes=1
+fi
+
+cat > "$out/Makefile.tmp" <<MAKEFILE
+# Written by scripts/shot.sh for this shot; targets and variables: $root/scripts/shot.mk
+SCENE := $scene
+FERRO_BIN := $bin
+SHOT_FIRST := 0
+SHOT_LAST := $last
+SPIKES := $spikes
+MAX_FRAMES := ${max_frames:+$last}
+include $root/scripts/shot.mk
+MAKEFILE
+mv -f "$out/Makefile.tmp" "$out/Makefile"
+
+start=$SECONDS
+echo "shot.sh: $scene -> $out: frames $first_render..$last_render of 0..$last, spikes $([[ $spikes == 1 ]] && echo on || echo off), $jobs jobs" >&2
+make -C "$out" --no-print-directory -j"$jobs" prepare
+make -C "$out" --no-print-directory -j"$jobs" FIRST="$first_render" LAST="$last_render" frames
+if [[ $video == 1 && -z "$frames" ]]; then
+  if command -v ffmpeg >/dev/null; then
+    make -C "$out" --no-print-directory video
+  else
+    echo "shot.sh: ffmpeg not found: no video (frames are in $out/png)" >&2
+  fi
+fi
+echo "shot.sh: done in $((SECONDS - start)) s: frames in $out/png$([[ -f $out/shot.mp4 && -z $frames ]] && echo ", video $out/shot.mp4, $out/shot.gif")" >&2

@@ -1,0 +1,194 @@
+// The shot pipeline as users run it: scripts/shot.sh on a tiny shot (300 particles, 4 frames),
+// then make's bookkeeping: a second make does nothing, touching one frame's particle file
+// re-runs only that frame, a [render] change re-renders without re-meshing, and
+// scripts/farm.sh renders a frame range through GNU parallel (--sshlogin : = this machine).
+#include "PovTestUtil.hpp"
+
+#include <catch2/catch.hpp>
+
+#include <chrono>
+#include <map>
+#include <regex>
+#include <thread>
+
+using namespace ferro;
+using namespace ferro::povtest;
+
+namespace {
+
+const char* kTinyScene = R"([shot]
+fps = 10
+duration = 0.3
+
+[[fluid.block]]
+shape = "cylinder"
+center = [0.0, 0.0, 0.0]
+radius = 0.02
+height = 0.005
+count = 300
+
+[container]
+type = "dish"
+center = [0.0, 0.0, 0.0]
+radius = 0.02
+height = 0.01
+
+[render]
+width = 48
+height = 36
+camera_position = [0.0, -0.07, 0.045]
+)";
+
+// The directory of executables the pipeline uses. ferro-sim and ferro-pov must be built; when
+// ferro-surface is not (yet), a stand-in that writes a small tetrahedron per frame takes its
+// place, which is enough to check the make bookkeeping (the meshes themselves are tested in
+// tests/surface).
+std::string pipelineBin(const fs::path& scratch)
+{
+    if (fs::exists(kBin + "ferro-surface"))
+        return kBin;
+    const fs::path bin = scratch / "bin";
+    fs::create_directories(bin);
+    for (const char* exe : {"ferro-sim", "ferro-pov"})
+        fs::create_symlink(kBin + exe, bin / exe);
+    spit(bin / "ferro-surface",
+         "#!/usr/bin/env bash\n# stand-in for ferro-surface: a tetrahedron per frame\n"
+         "out=''; while [[ $# -gt 0 ]]; do [[ $1 == --out ]] && out=$2; shift; done\n"
+         "printf 'ply\\nformat ascii 1.0\\nelement vertex 4\\nproperty float x\\nproperty float y\\nproperty float z\\n"
+         "element face 4\\nproperty list uchar int vertex_indices\\nend_header\\n"
+         "0 0 0\\n0.01 0 0\\n0 0.01 0\\n0 0 0.01\\n3 0 2 1\\n3 0 1 3\\n3 0 3 2\\n3 1 2 3\\n' > \"$out\"\n");
+    fs::permissions(bin / "ferro-surface", fs::perms::owner_all);
+    WARN("ferro-surface is not built: the make bookkeeping is tested with a stand-in mesher");
+    return bin.string();
+}
+
+// Number of recipe lines in `text` that mention `what` for each frame tag "_0000".."_0003".
+std::map<std::string, int> perFrame(const std::string& text, const std::string& what)
+{
+    std::map<std::string, int> count;
+    std::istringstream in(text);
+    std::string line;
+    static const std::regex tag("(?:_|10#)(\\d{4})");
+    while (std::getline(in, line)) {
+        std::smatch m;
+        if (line.find(what) != std::string::npos && std::regex_search(line, m, tag))
+            ++count[m[1]];
+    }
+    return count;
+}
+
+// Marks a file as modified now (file times have nanosecond resolution here; a short pause
+// keeps the order unambiguous even on coarser file systems).
+void touchNow(const fs::path& p)
+{
+    std::this_thread::sleep_for(std::chrono::milliseconds(20));
+    fs::last_write_time(p, fs::file_time_type::clock::now());
+}
+
+} // namespace
+
+TEST_CASE("shot.sh renders a tiny shot; make re-runs exactly the stale frames and stages", "[pov][pipeline]")
+{
+    if (!fs::exists(kBin + "ferro-sim")) {
+        WARN("ferro-sim is not built: skipped");
+        return;
+    }
+    const fs::path dir = freshDir("pipeline");
+    spit(dir / "tiny.toml", kTinyScene);
+    const std::string bin = pipelineBin(dir);
+    const fs::path out = dir / "shot";
+    const std::string make = "make -C '" + out.string() + "' --no-print-directory ";
+
+    Result res = run("FERRO_BIN='" + bin + "' '" + kSource + "/scripts/shot.sh' '" + (dir / "tiny.toml").string() + "' '" +
+                     out.string() + "' -j2");
+    INFO(res.out);
+    REQUIRE(res.code == 0);
+    for (int f = 0; f <= 3; ++f)
+        CHECK(fs::exists(out / "png" / ("frame_000" + std::to_string(f) + ".png")));
+    if (!run("command -v ffmpeg").code) {
+        CHECK(fs::file_size(out / "shot.mp4") > 0);
+        CHECK(fs::file_size(out / "shot.gif") > 0);
+    }
+
+    // A second make has nothing to do.
+    CHECK(run(make + "-q").code == 0);
+    res = run(make + "-n");
+    CHECK(res.out.find("Nothing to be done") != std::string::npos);
+
+    // One frame's particles change: only that frame is re-meshed, re-exported, re-rendered.
+    std::map<int, fs::file_time_type> rendered;
+    for (int f = 0; f <= 3; ++f)
+        rendered[f] = fs::last_write_time(out / "png" / ("frame_000" + std::to_string(f) + ".png"));
+    touchNow(out / "particles" / "particles_0002.ply");
+    res = run(make + "-n frames");
+    INFO(res.out);
+    CHECK(perFrame(res.out, "ferro-surface particles") == std::map<std::string, int>{{"0002", 1}});
+    CHECK(perFrame(res.out, "ferro-pov") == std::map<std::string, int>{{"0002", 1}});
+    CHECK(perFrame(res.out, "povray render.ini") == std::map<std::string, int>{{"0002", 1}});
+    res = run(make + "-j2 frames");
+    REQUIRE(res.code == 0);
+    for (int f = 0; f <= 3; ++f) {
+        const auto now = fs::last_write_time(out / "png" / ("frame_000" + std::to_string(f) + ".png"));
+        INFO("frame " << f);
+        CHECK((now != rendered[f]) == (f == 2));
+    }
+    CHECK(run(make + "-q frames").code == 0);
+
+    // [render] changes: every frame re-renders, none is re-meshed or re-exported.
+    std::string scene = slurp(dir / "tiny.toml");
+    scene.replace(scene.find("width = 48"), 10, "width = 40");
+    spit(dir / "tiny.toml", scene);
+    touchNow(dir / "tiny.toml");
+    res = run(make + "-n frames");
+    INFO(res.out);
+    CHECK(perFrame(res.out, "povray render.ini").size() == 4);
+    CHECK(perFrame(res.out, "ferro-surface particles").empty());
+    CHECK(perFrame(res.out, "--no-shot").empty());
+    REQUIRE(run(make + "-j2 frames").code == 0);
+    CHECK(run(make + "-q frames").code == 0);
+
+    // A comment-only edit of the scene changes no section: nothing to do.
+    spit(dir / "tiny.toml", slurp(dir / "tiny.toml") + "\n# a note\n");
+    touchNow(dir / "tiny.toml");
+    CHECK(run(make + "-q frames").code == 0);
+
+    // The artists' look changes: every frame re-renders.
+    touchNow(out / "shot" / "look.inc");
+    res = run(make + "-n frames");
+    CHECK(perFrame(res.out, "povray render.ini").size() == 4);
+    CHECK(perFrame(res.out, "ferro-surface particles").empty());
+    REQUIRE(run(make + "-j2 frames").code == 0);
+
+    // The farm: frames 1..2 again on "this machine" through GNU parallel.
+    if (run("command -v parallel").code) {
+        WARN("GNU parallel is not installed: farm.sh not tested");
+        return;
+    }
+    fs::remove(out / "png" / "frame_0001.png");
+    fs::remove(out / "png" / "frame_0002.png");
+    res = run("'" + kSource + "/scripts/farm.sh' '" + out.string() + "' --frames 1:2 --sshlogin : --no-video");
+    INFO(res.out);
+    REQUIRE(res.code == 0);
+    CHECK(fs::exists(out / "png" / "frame_0001.png"));
+    CHECK(fs::exists(out / "png" / "frame_0002.png"));
+    CHECK(run(make + "-q frames").code == 0);
+}
+
+TEST_CASE("shot.sh rejects bad arguments with one line and exit code 2", "[pov][pipeline]")
+{
+    if (!fs::exists(kBin + "ferro-sim")) {
+        WARN("ferro-sim is not built: skipped");
+        return;
+    }
+    const fs::path dir = freshDir("shot_errors");
+    const std::string shot = "FERRO_BIN='" + pipelineBin(dir) + "' '" + kSource + "/scripts/shot.sh' ";
+    Result res = run(shot + "'" + (dir / "missing.toml").string() + "' '" + (dir / "out").string() + "'");
+    CHECK(res.code == 2);
+    CHECK(res.out.rfind("shot.sh: error: ", 0) == 0);
+    spit(dir / "tiny.toml", kTinyScene);
+    res = run(shot + "'" + (dir / "tiny.toml").string() + "' '" + (dir / "out").string() + "' --frames 5");
+    CHECK(res.code == 2);
+    res = run(shot + "'" + (dir / "tiny.toml").string() + "' '" + (dir / "out").string() + "' --frames 0:99");
+    CHECK(res.code == 2);
+    CHECK(res.out.find("ends at frame 3") != std::string::npos);
+}
