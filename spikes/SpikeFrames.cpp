@@ -1,0 +1,209 @@
+#include "spikes/SpikeFrames.hpp"
+
+#include "sim/MagnetState.hpp"
+#include "sim/ParticleFile.hpp"
+#include "sim/SceneFile.hpp"
+
+#include <tbb/parallel_for.h>
+
+#include <atomic>
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <exception>
+#include <iostream>
+#include <mutex>
+#include <sstream>
+
+namespace ferro {
+
+SpikeScene parseSpikeScene(const SceneDocument& doc)
+{
+    const SimScene sim = parseSimScene(doc);
+    SpikeScene scene;
+    scene.params = parseSpikeParams(doc);
+    scene.magnets = sim.magnets;
+    scene.fps = sim.shot.fps;
+    SpikeFluid& fluid = scene.fluid;
+    fluid.density = sim.fluid.restDensity;
+    fluid.surfaceTension = sim.fluid.surfaceTension;
+    fluid.gravity = sim.solver.gravity;
+    fluid.law = sim.magnetization;
+    fluid.particleSpacing = sim.fluid.spacing;
+    const ContainerParams& c = sim.container;
+    if (c.type != ContainerParams::Type::None)
+        fluid.container = std::shared_ptr<const Container>(makeContainer(c, doc.path() + ": [container]"));
+    if (c.type == ContainerParams::Type::Dish) {
+        fluid.hasCenter = true;
+        fluid.center = c.center;
+    } else if (c.type == ContainerParams::Type::Box) {
+        fluid.hasCenter = true;
+        fluid.center = 0.5 * (c.min + c.max);
+    }
+    return scene;
+}
+
+namespace {
+
+bool hasComment(const std::vector<std::pair<std::string, std::string>>& comments, const std::string& key)
+{
+    for (const auto& kv : comments)
+        if (kv.first == key) return true;
+    return false;
+}
+
+std::string formatDouble(double v)
+{
+    char buf[64];
+    std::snprintf(buf, sizeof buf, "%.9g", v);
+    return buf;
+}
+
+} // namespace
+
+SpikeInput loadSpikeInput(const SpikeScene& scene, const std::string& surfacePath, const std::string& particlePath,
+                          int frameHint)
+{
+    SpikeInput in;
+    try {
+        in.surface = readMesh(surfacePath);
+    } catch (const MeshFileError& e) {
+        throw SpikeInputError(e.what());
+    }
+    if (in.surface.empty()) throw SpikeInputError(surfacePath + ": mesh has no triangles");
+    for (const Vec3& v : in.surface.vertices)
+        if (!v.allFinite()) throw SpikeInputError(surfacePath + ": mesh has a non-finite vertex");
+    in.fluid = scene.fluid;
+
+    ParticleTable meshHeader;
+    meshHeader.comments = in.surface.comments;
+    ParticleTable particles;
+    const bool haveParticles = !particlePath.empty();
+    try {
+        if (haveParticles) particles = readParticleFile(particlePath);
+        // Magnets: particle header, then mesh header, then the scene at the frame's time.
+        if (haveParticles && hasComment(particles.comments, "magnet_count")) {
+            in.magnets = readMagnetComments(particles);
+        } else if (hasComment(meshHeader.comments, "magnet_count")) {
+            in.magnets = readMagnetComments(meshHeader);
+        } else {
+            double time = std::nan("");
+            for (const ParticleTable* t : {&particles, &meshHeader}) {
+                if (!std::isnan(time)) break;
+                time = t->commentNumber("time", std::nan(""));
+                if (std::isnan(time)) {
+                    const double frame = t->commentNumber("frame", std::nan(""));
+                    if (!std::isnan(frame)) time = frame / scene.fps;
+                }
+            }
+            if (std::isnan(time)) time = frameHint >= 0 ? frameHint / scene.fps : 0.0;
+            for (const MagnetTrack& track : scene.magnets) in.magnets.push_back(track.at(time));
+        }
+    } catch (const ParticleFileError& e) {
+        throw SpikeInputError(e.what());
+    }
+    for (const ParticleTable* t : {&meshHeader, &particles}) { // the particle file wins
+        in.fluid.law.susceptibility = t->commentNumber("susceptibility", in.fluid.law.susceptibility);
+        in.fluid.law.saturation = t->commentNumber("saturation", in.fluid.law.saturation);
+    }
+    if (!(in.fluid.law.susceptibility >= 0) || !(in.fluid.law.saturation >= 0))
+        throw SpikeInputError(surfacePath + ": negative susceptibility or saturation in the header");
+
+    if (haveParticles && particles.rows() > 0) {
+        try {
+            const std::vector<Vec3> x = particles.vec3("x", "y", "z");
+            in.particles.positions.reserve(x.size());
+            for (const Vec3& p : x) in.particles.positions.push_back(p.cast<double>());
+            in.particles.spacing = particles.commentNumber("spacing", in.fluid.particleSpacing);
+            in.particles.magnetization.resize(x.size());
+            if (particles.column("mx") >= 0 && particles.column("my") >= 0 && particles.column("mz") >= 0) {
+                const std::vector<Vec3> M = particles.vec3("mx", "my", "mz");
+                for (size_t i = 0; i < M.size(); ++i) in.particles.magnetization[i] = double(M[i].norm());
+            } else {
+                // Older files: the fluid's law in the magnets' field at the particle.
+                for (size_t i = 0; i < x.size(); ++i)
+                    in.particles.magnetization[i] =
+                        fluidMagnetization(magnetField(in.magnets, in.particles.positions[i]).norm(), in.fluid.law);
+            }
+        } catch (const ParticleFileError& e) {
+            throw SpikeInputError(particlePath + ": " + e.what());
+        }
+        for (double m : in.particles.magnetization)
+            if (!std::isfinite(m)) throw SpikeInputError(particlePath + ": non-finite magnetization");
+        if (in.particles.spacing > 0) in.fluid.particleSpacing = in.particles.spacing;
+    }
+    return in;
+}
+
+SpikeResult spikeFrame(const SpikeScene& scene, const std::string& surfacePath, const std::string& particlePath,
+                       const std::string& outPath, int frameHint)
+{
+    const SpikeInput in = loadSpikeInput(scene, surfacePath, particlePath, frameHint);
+    SpikeResult res = addSpikes(in, scene.params);
+    TriangleMesh& out = res.mesh;
+    if (!hasComment(out.comments, "magnet_count")) {
+        ParticleTable header;
+        header.comments = out.comments;
+        writeMagnetComments(header, in.magnets, &in.fluid.law);
+        out.comments = header.comments;
+    }
+    auto set = [&](const std::string& key, const std::string& value) {
+        for (auto& kv : out.comments)
+            if (kv.first == key) {
+                kv.second = value;
+                return;
+            }
+        out.comments.emplace_back(key, value);
+    };
+    set("spike_tips", std::to_string(res.tips.size()));
+    set("spike_spacing", formatDouble(res.patterns.empty() ? 0.0 : res.patterns.front().spacing));
+    set("critical_magnetization", formatDouble(res.critical.magnetization));
+    writeMesh(outPath, out);
+    return res;
+}
+
+void spikeFrames(const SpikeScene& scene, const std::string& surfacePattern, const std::string& particlePattern,
+                 const std::string& outPattern, int first, int last, bool quiet)
+{
+    if (last < first) throw SpikeInputError("--frames: last frame before first");
+    if (first != last && framePath(outPattern, first) == framePath(outPattern, first + 1))
+        throw SpikeInputError("--out: a frame range needs a {:04} or %04d placeholder in the output pattern");
+    if (first != last && framePath(surfacePattern, first) == framePath(surfacePattern, first + 1))
+        throw SpikeInputError("a frame range needs a {:04} or %04d placeholder in the surface pattern");
+    std::mutex mutex;
+    std::exception_ptr failure;
+    int failedFrame = 0;
+    std::atomic<bool> stop{false};
+    tbb::parallel_for(first, last + 1, 1, [&](int frame) {
+        if (stop) return;
+        try {
+            const auto start = std::chrono::steady_clock::now();
+            const SpikeResult res =
+                spikeFrame(scene, framePath(surfacePattern, frame),
+                           particlePattern.empty() ? std::string() : framePath(particlePattern, frame),
+                           framePath(outPattern, frame), frame);
+            const double seconds =
+                std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+            if (!quiet) {
+                std::ostringstream line;
+                line << "ferro-spikes: frame " << frame << ": " << res.tips.size() << " tips";
+                if (!res.patterns.empty()) line << ", spacing " << res.patterns.front().spacing * 1e3 << " mm";
+                line << ", " << res.mesh.triangles.size() << " triangles, volume "
+                     << (res.volumeIn > 0 ? 100.0 * (res.volumeOut - res.volumeIn) / res.volumeIn : 0.0) << " %, "
+                     << seconds << " s\n";
+                std::lock_guard<std::mutex> lock(mutex);
+                std::cerr << line.str();
+            }
+        } catch (...) {
+            std::lock_guard<std::mutex> lock(mutex);
+            if (!failure || frame < failedFrame) {
+                failure = std::current_exception();
+                failedFrame = frame;
+            }
+            stop = true;
+        }
+    });
+    if (failure) std::rethrow_exception(failure);
+}
+
+} // namespace ferro

@@ -1,0 +1,52 @@
+#pragma once
+// Files in, files out: one frame (surface mesh + particle file + scene -> spiky mesh) and
+// frame ranges with several frames in flight. This is what ferro-spikes' main calls.
+#include "spikes/SpikeMapper.hpp"
+
+#include <stdexcept>
+#include <string>
+#include <vector>
+
+namespace ferro {
+
+class SceneDocument;
+
+/// Input that cannot be used (unreadable or malformed mesh or particle file, inconsistent
+/// options). what() is one line; ferro-spikes exits with code 2.
+class SpikeInputError : public std::runtime_error {
+public:
+    using std::runtime_error::runtime_error;
+};
+
+/// What a run takes from the scene file, parsed and validated once.
+struct SpikeScene {
+    SpikeParams params;                ///< [spikes]
+    SpikeFluid fluid;                  ///< [fluid], [container], [sim].gravity, [magnetization]
+    std::vector<MagnetTrack> magnets;  ///< [[magnets]]: fallback when files carry no magnet state
+    double fps = 30.0;                 ///< [shot].fps: frame -> time when files carry no time
+};
+
+/// Parses the scene (the whole sim scene must be valid, plus [spikes]). Throws SceneError.
+SpikeScene parseSpikeScene(const SceneDocument& doc);
+
+/// Reads one frame's input. `particlePath` may be empty (the law then gives |M| at the field).
+/// Magnets, in order of preference: the particle file's header, the mesh's header, the scene's
+/// tracks at the frame's time (header `time`, else `frame` / fps, else `frameHint` / fps).
+/// The magnetic law likewise: headers (susceptibility, saturation), else [magnetization].
+/// Throws SpikeInputError.
+SpikeInput loadSpikeInput(const SpikeScene& scene, const std::string& surfacePath,
+                          const std::string& particlePath, int frameHint = -1);
+
+/// One frame: load, addSpikes, write `outPath` atomically (PLY with normals and the input's
+/// comments plus spike_tips, spike_spacing, critical_magnetization). Throws SpikeInputError on
+/// bad input, MeshFileError when the output cannot be written.
+SpikeResult spikeFrame(const SpikeScene& scene, const std::string& surfacePath, const std::string& particlePath,
+                       const std::string& outPath, int frameHint = -1);
+
+/// A frame range: patterns with a {:04} / %04d placeholder, frames first..last inclusive,
+/// several in flight (TBB; the caller limits threads). Progress lines on stderr unless quiet.
+/// Stops at the first failing frame and rethrows its error (frames already written are kept).
+void spikeFrames(const SpikeScene& scene, const std::string& surfacePattern, const std::string& particlePattern,
+                 const std::string& outPattern, int first, int last, bool quiet);
+
+} // namespace ferro

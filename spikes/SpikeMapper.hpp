@@ -1,0 +1,108 @@
+#pragma once
+// The paper's spike synthesis (section 4.3, eqs. 12-16, Fig. 7) on one frame's surface mesh.
+//
+// What addSpikes does, in order:
+//  1. Field and magnetization on the surface: H = magnets (at the frame's time) + the
+//     magnetized particles' own field when available; |M| from the particles around a surface
+//     point (Shepard average of their M), or from the fluid's law at H when there are none.
+//     Surface closer than wall_margin to the container is wetted wall and never spiky.
+//  2. One pattern per magnet whose field makes the fluid supercritical (|M| > M_c, eq. 16) where
+//     the magnet's axis meets the free surface: that point is the pattern origin x0 (for a
+//     uniform field: the line along the field through [spikes] origin, else through the
+//     container's centre). The lattice axes come from a fixed world direction projected into
+//     the tangent plane at x0, so a still magnet gives the same tips in every frame.
+//  3. Tips, as in Fig. 7: from x0 trace the six axis directions along the surface with step
+//     l (eq. 15, or the physical spacing), each next tip where the field line through the
+//     stepped point meets the surface; tips between two axes interpolate the two n-th axis
+//     tips and are again dropped along the field line onto the surface.
+//  4. Refinement: CGAL isotropic remeshing of the supercritical region to l / resolution.
+//  5. Displacement: each vertex gets the lattice coordinates of eq. 13 from its nearby tips
+//     (each tip's local lattice basis, from its neighbours' positions, maps the vertex to
+//     coordinates; a smooth partition of unity over tips blends them, exact on a regular
+//     lattice), height C0 F (C0 = beta |H|, eq. 14) times the fades (magnetization from M_c,
+//     distance from the wetted wall, coverage of the traced lattice), along the local field
+//     direction (tilted at most max_tilt from the normal). Several patterns blend by field
+//     dominance |H_i|^2 / sum |H_j|^2, so they meet without cracks.
+//  6. Volume: a normal offset over the spiky region, weighted like the heights, restores the
+//     input's enclosed volume (the paper's first listed limitation).
+#include "sim/Container.hpp"
+#include "sim/MagnetField.hpp"
+#include "sim/SimParams.hpp"
+#include "spikes/SpikeParams.hpp"
+#include "spikes/SpikePhysics.hpp"
+#include "surface/TriangleMesh.hpp"
+
+#include <functional>
+#include <memory>
+#include <vector>
+
+namespace ferro {
+
+/// What addSpikes needs to know about the fluid and its vessel.
+struct SpikeFluid {
+    double density = 1000.0;        ///< rho [kg/m^3]
+    double surfaceTension = 0.0;    ///< sigma [N/m]
+    Vec3d gravity{0, 0, -9.81};     ///< [m/s^2]
+    MagnetizationParams law;        ///< chi0, Ms
+    std::shared_ptr<const Container> container; ///< wetted walls; null = every surface is free
+    bool hasCenter = false;         ///< a natural anchor (the container's centre) for uniform fields
+    Vec3d center{0, 0, 0};
+    double particleSpacing = 0.0;   ///< [m]; 0 = unknown
+};
+
+/// The frame's particles (optional): positions and |M| [A/m] for the mapping area.
+struct SpikeParticles {
+    std::vector<Vec3d> positions;
+    std::vector<double> magnetization; ///< |M| per particle; empty = use the law at the local field
+    double spacing = 0.0;              ///< particle spacing [m]
+};
+
+struct SpikeInput {
+    TriangleMesh surface;               ///< closed fluid surface, outward triangles
+    std::vector<Magnet> magnets;        ///< the magnets at the frame's time
+    SpikeFluid fluid;
+    SpikeParticles particles;
+    /// Field of the magnetized particles at a point [A/m] (null = magnets only).
+    std::function<Vec3d(const Vec3d&)> particleField;
+};
+
+/// One hexagonal pattern (one magnet).
+struct SpikePattern {
+    int magnet = -1;        ///< index into SpikeInput::magnets
+    Vec3d origin;           ///< x0 on the surface [m]
+    Vec3d normal;           ///< outward surface normal at x0
+    Vec3d axis;             ///< first lattice axis (unit, tangent at x0)
+    double spacing = 0;     ///< tip spacing l [m]
+    double field = 0;       ///< |H(x0)| [A/m]
+    double magnetization = 0; ///< |M(x0)| [A/m]
+    int rings = 0;          ///< hexagonal rings traced around x0
+};
+
+struct SpikeTip {
+    int pattern = -1;
+    int i = 0, j = 0;       ///< lattice coordinates: base = x0 + i l e1 + j l e2 on a flat surface
+    Vec3d base;             ///< tip position on the undisplaced surface [m]
+    Vec3d apex;             ///< base + height * direction [m]
+    Vec3d direction;        ///< unit growth direction (the local field, outward)
+    double height = 0;      ///< displacement of the tip [m]
+};
+
+struct SpikeResult {
+    TriangleMesh mesh;      ///< the spiky surface, with normals and the input's comments
+    TriangleMesh refined;   ///< the refined surface before displacement (same vertex order as mesh)
+    std::vector<SpikePattern> patterns;
+    std::vector<SpikeTip> tips;      ///< tips with height > 0, pattern by pattern
+    CriticalMagnetization critical;  ///< eq. 16 for this fluid
+    double volumeIn = 0, volumeOut = 0; ///< enclosed volumes [m^3]
+    double maxHeight = 0;            ///< largest tip height [m]
+    bool refinedOk = true;           ///< false: the mesh was not a manifold CGAL could remesh
+};
+
+/// The field H [A/m] at x: the magnets plus, when given, the magnetized particles.
+Vec3d totalFieldAt(const SpikeInput& input, const Vec3d& x);
+
+/// Synthesizes the spikes on input.surface. Deterministic: the same input gives the same
+/// output. Below M_c everywhere (or with spikes disabled) the surface is returned unchanged.
+SpikeResult addSpikes(const SpikeInput& input, const SpikeParams& params);
+
+} // namespace ferro

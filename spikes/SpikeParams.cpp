@@ -1,0 +1,47 @@
+#include "spikes/SpikeParams.hpp"
+
+#include "sim/SceneFile.hpp"
+
+namespace ferro {
+
+SpikeParams parseSpikeParams(const SceneDocument& doc)
+{
+    TableReader r = doc.section("spikes");
+    SpikeParams p;
+    p.enabled = r.boolean("enabled", p.enabled);
+    p.spacing = r.choice("spacing", {"paper", "physical"}, "paper") == "physical" ? SpikeParams::Spacing::Physical
+                                                                                 : SpikeParams::Spacing::Paper;
+    p.alpha = r.positive("alpha", p.alpha);
+    p.beta = r.nonNegative("beta", p.beta);
+    p.minSpacing = r.positive("min_spacing", p.minSpacing);
+    p.maxSpacing = r.positive("max_spacing", p.maxSpacing);
+    if (p.maxSpacing < p.minSpacing)
+        r.fail("max_spacing", "must be >= min_spacing");
+    p.maxAspect = r.positive("max_aspect", p.maxAspect);
+    p.sharpness = r.number("sharpness", p.sharpness);
+    if (!(p.sharpness >= 1.0 && p.sharpness <= 8.0))
+        r.fail("sharpness", "must be in [1, 8]");
+    p.magnetizationFade = r.positive("magnetization_fade", p.magnetizationFade);
+    p.wallMargin = r.nonNegative("wall_margin", p.wallMargin);
+    p.wallFade = r.nonNegative("wall_fade", p.wallFade);
+    p.resolution = r.number("resolution", p.resolution);
+    if (!(p.resolution >= 3.0 && p.resolution <= 100.0))
+        r.fail("resolution", "must be in [3, 100]");
+    const long iterations = r.integer("remesh_iterations", p.remeshIterations);
+    if (iterations < 0 || iterations > 20)
+        r.fail("remesh_iterations", "must be in [0, 20]");
+    p.remeshIterations = int(iterations);
+    p.ambientDensity = r.nonNegative("ambient_density", p.ambientDensity);
+    p.hasOrigin = r.has("origin");
+    p.origin = r.vec3("origin", p.origin);
+    p.orientation = r.number("orientation", p.orientation);
+    p.maxTilt = r.number("max_tilt", p.maxTilt);
+    if (!(p.maxTilt >= 0.0 && p.maxTilt <= 80.0))
+        r.fail("max_tilt", "must be in [0, 80] degrees");
+    p.particleField = r.boolean("particle_field", p.particleField);
+    p.conserveVolume = r.boolean("conserve_volume", p.conserveVolume);
+    r.finish();
+    return p;
+}
+
+} // namespace ferro

@@ -1,0 +1,47 @@
+#pragma once
+// [spikes]: parameters of the procedural Rosensweig spikes (paper section 4.3), SI units.
+// Every default here is the documented default of the scene key in examples/annotated.toml.
+#include "sim/Types.hpp"
+
+namespace ferro {
+
+class SceneDocument;
+
+struct SpikeParams {
+    /// How the tip spacing l (distance between neighbouring tips) is chosen.
+    enum class Spacing {
+        Paper,    ///< eq. 15: l = alpha / |H(x0)|, so tips crowd as the field grows
+        Physical  ///< the critical wavelength lambda_c = 2 pi sqrt(sigma / (delta_rho g)) of
+                  ///< linear theory: eq. 13 with k = 2 pi / lambda_c, tips 2/sqrt(3) lambda_c apart
+    };
+    bool enabled = true;             ///< false: copy the surface unchanged
+    Spacing spacing = Spacing::Paper;
+    double alpha = 100.0;            ///< eq. 15 constant [A]: l = 1 cm at |H(x0)| = 10 kA/m
+    double beta = 1.5e-7;            ///< eq. 14 constant [m per A/m]: C0 = beta |H|; tips stand 3 C0
+                                     ///< above the mean level, troughs 1.5 C0 below
+    double minSpacing = 2e-3;        ///< clamp of l [m] (a huge field cannot shrink spikes to nothing)
+    double maxSpacing = 0.05;        ///< clamp of l [m]
+    double maxAspect = 1.0;          ///< cap of tip height (3 C0) over tip spacing l, > 0
+    double sharpness = 1.0;          ///< profile exponent p >= 1: 1 = eq. 13 exactly; larger p narrows
+                                     ///< the spikes into cones over flat troughs (same tips, same spacing)
+    double magnetizationFade = 0.25; ///< height ramps from 0 at |M| = M_c to full at (1 + fade) M_c
+    double wallMargin = 0.0;         ///< surface closer than this to a container wall is wetted wall,
+                                     ///< never spiky [m]; 0 = 1.5 particle spacings (2 mm if unknown)
+    double wallFade = 0.0;           ///< height ramps in over this distance from the wetted wall [m];
+                                     ///< 0 = half the tip spacing
+    double resolution = 16.0;        ///< target mesh edges per tip spacing in the spiky area, >= 3
+    int remeshIterations = 3;        ///< CGAL isotropic remeshing iterations, >= 0 (0 = no refinement)
+    double ambientDensity = 1.2;     ///< density of the medium above the fluid (air) [kg/m^3]
+    bool hasOrigin = false;          ///< origin given: the pattern of a uniform field is anchored on
+    Vec3d origin{0, 0, 0};           ///< the line through it along the field [m]
+    double orientation = 0.0;        ///< lattice axis angle from the world x axis [deg]
+    double maxTilt = 60.0;           ///< spikes grow along the field, but at most this far from the
+                                     ///< surface normal [deg] (a grazing field would fold the surface)
+    bool particleField = true;       ///< add the magnetized particles' own field to the magnets'
+    bool conserveVolume = true;      ///< restore the enclosed volume after displacement
+};
+
+/// Parses the scene's [spikes] section (absent = defaults); unknown keys are errors (SceneError).
+SpikeParams parseSpikeParams(const SceneDocument& doc);
+
+} // namespace ferro

@@ -1,0 +1,88 @@
+#include "spikes/SpikePhysics.hpp"
+
+#include <cmath>
+#include <limits>
+
+namespace ferro {
+
+namespace {
+constexpr double kPi = 3.14159265358979323846;
+
+// Langevin function L(xi) = coth(xi) - 1/xi, by its series near 0 where the difference cancels.
+double langevin(double xi)
+{
+    if (std::abs(xi) < 1e-3)
+        return xi / 3.0 - xi * xi * xi / 45.0;
+    return 1.0 / std::tanh(xi) - 1.0 / xi;
+}
+} // namespace
+
+double fluidMagnetization(double H, const MagnetizationParams& law)
+{
+    H = std::abs(H);
+    if (law.saturation <= 0)
+        return law.susceptibility * H;
+    return law.saturation * langevin(3.0 * law.susceptibility * H / law.saturation);
+}
+
+CriticalMagnetization criticalMagnetization(double deltaRho, double gravity, double surfaceTension,
+                                            const MagnetizationParams& law)
+{
+    CriticalMagnetization c;
+    const double inf = std::numeric_limits<double>::infinity();
+    if (!(law.susceptibility > 0)) {
+        c.magnetization = c.internalField = c.appliedField = inf;
+        return c;
+    }
+    const double capillary = std::sqrt(std::max(0.0, gravity * deltaRho * surfaceTension));
+    c.r0 = 1.0 + law.susceptibility;
+    for (int iteration = 0; iteration < 50; ++iteration) {
+        const double Mc = std::sqrt(2.0 / kMu0 * (1.0 + 1.0 / c.r0) * capillary);
+        c.magnetization = Mc;
+        if (law.saturation > 0 && Mc >= law.saturation) {
+            c.magnetization = c.internalField = c.appliedField = inf;
+            return c;
+        }
+        if (Mc == 0) {
+            c.internalField = c.appliedField = 0;
+            return c;
+        }
+        // Invert the monotone law by bisection: M(H) = Mc.
+        double lo = 0, hi = Mc / law.susceptibility;
+        while (fluidMagnetization(hi, law) < Mc) hi *= 2;
+        for (int i = 0; i < 100; ++i) {
+            const double mid = 0.5 * (lo + hi);
+            (fluidMagnetization(mid, law) < Mc ? lo : hi) = mid;
+        }
+        const double H = 0.5 * (lo + hi);
+        const double dH = 1e-6 * H;
+        const double chiChord = Mc / H;
+        const double chiTangent = (fluidMagnetization(H + dH, law) - fluidMagnetization(H - dH, law)) / (2 * dH);
+        const double r0 = std::sqrt((1 + chiChord) * (1 + chiTangent));
+        c.internalField = H;
+        c.appliedField = H + Mc;
+        if (std::abs(r0 - c.r0) < 1e-12 * r0) break;
+        c.r0 = r0;
+    }
+    return c;
+}
+
+double criticalWavelength(double deltaRho, double gravity, double surfaceTension)
+{
+    if (!(deltaRho * gravity > 0)) return 0;
+    return 2.0 * kPi * std::sqrt(std::max(0.0, surfaceTension) / (deltaRho * gravity));
+}
+
+double hexProfile(double a, double b)
+{
+    return std::cos(2 * kPi * (a + b)) + std::cos(2 * kPi * a) + std::cos(2 * kPi * b);
+}
+
+double sharpenedProfile(double F, double p)
+{
+    if (p == 1.0) return F;
+    const double t = std::min(1.0, std::max(0.0, (F + 1.5) / 4.5));
+    return 4.5 * std::pow(t, p) - 1.5;
+}
+
+} // namespace ferro

@@ -1,0 +1,53 @@
+#pragma once
+// The physics behind the spikes: the fluid's magnetization law, the Cowley-Rosensweig
+// critical magnetization (paper eq. 16) and wavelength, and the hexagonal height field of
+// eq. 13. Pure functions, SI units.
+#include "sim/SimParams.hpp"
+
+namespace ferro {
+
+constexpr double kMu0 = 4e-7 * 3.14159265358979323846; ///< vacuum permeability [T m/A]
+
+/// |M| [A/m] of the fluid in a field of magnitude H [A/m]: Langevin law
+/// M = Ms (coth xi - 1/xi), xi = 3 chi0 H / Ms (paper eq. 5 with saturation), or chi0 H when
+/// Ms = 0. Monotone, M(0) = 0, dM/dH(0) = chi0.
+double fluidMagnetization(double H, const MagnetizationParams& law);
+
+/// The threshold of the normal-field (Rosensweig) instability of a flat layer.
+struct CriticalMagnetization {
+    double magnetization = 0;  ///< M_c [A/m]; +inf when the fluid can never reach it
+    double r0 = 1;             ///< sqrt(mu_c mu_t) / mu0 at M_c (chord and tangent permeability)
+    double internalField = 0;  ///< H inside the fluid at M_c [A/m]
+    double appliedField = 0;   ///< field applied normal to a flat layer that gives M_c inside
+                               ///< (normal B continuous: H0 = H_in + M_c) [A/m]
+};
+
+/// Paper eq. 16 (Cowley & Rosensweig 1967):
+///     M_c^2 = (2 / mu0) (1 + 1 / r0) sqrt(g delta_rho sigma),  r0 = sqrt(mu_c mu_t) / mu0,
+/// with the chord permeability mu_c = mu0 (1 + M/H) and the tangent permeability
+/// mu_t = mu0 (1 + dM/dH) of `law` taken at M_c itself (a fixed point, solved by iteration;
+/// for a linear law r0 = 1 + chi0). delta_rho = fluid - ambient density [kg/m^3], g [m/s^2],
+/// sigma [N/m]. Returns magnetization = +inf if the law saturates below M_c or chi0 = 0.
+CriticalMagnetization criticalMagnetization(double deltaRho, double gravity, double surfaceTension,
+                                            const MagnetizationParams& law);
+
+/// Critical wavelength lambda_c = 2 pi sqrt(sigma / (delta_rho g)) [m] (capillary length times 2 pi).
+double criticalWavelength(double deltaRho, double gravity, double surfaceTension);
+
+/// Distance between neighbouring peaks of eq. 13 for wavenumber k: 4 pi / (sqrt(3) k).
+inline double tipSpacingForWavenumber(double k) { return 4.0 * 3.14159265358979323846 / (1.7320508075688772 * k); }
+/// Inverse of tipSpacingForWavenumber.
+inline double wavenumberForTipSpacing(double l) { return 4.0 * 3.14159265358979323846 / (1.7320508075688772 * l); }
+
+/// Eq. 13 divided by C0, in lattice coordinates: with e1 along eq. 13's x axis and e2 at
+/// 60 degrees from it, both of length l = 4 pi / (sqrt3 k), the point a e1 + b e2 has
+///     F = cos(k/2 (sqrt3 x + y)) + cos(k/2 (sqrt3 x - y)) + cos(k y)
+///       = cos(2 pi (a + b)) + cos(2 pi a) + cos(2 pi b)
+/// F = 3 at the tips (integer a, b), -1.5 at the centres of the lattice triangles; mean 0.
+double hexProfile(double a, double b);
+
+/// The profile of height F (in [-1.5, 3]) narrowed by exponent p >= 1:
+/// 4.5 ((F + 1.5) / 4.5)^p - 1.5. p = 1 is F itself; tips stay at 3, troughs at -1.5.
+double sharpenedProfile(double F, double p);
+
+} // namespace ferro

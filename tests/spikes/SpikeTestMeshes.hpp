@@ -1,0 +1,75 @@
+#pragma once
+// Test and benchmark inputs for ferro-spikes: closed fluid bodies built directly, so the spike
+// tests do not depend on ferro-surface.
+#include "surface/TriangleMesh.hpp"
+
+#include <cmath>
+#include <functional>
+
+namespace ferro::spiketest {
+
+/// A closed cylinder of fluid ("a dish's pool"): floor at z = 0, axis +z through `center`,
+/// radius R, top at z = height(r, angle). Top and floor are concentric rings ring_k of 6k
+/// vertices (k = 0..rings; a near-uniform triangulation with 6-fold symmetry), the side one
+/// band of quads. Triangles are counter-clockwise seen from outside.
+inline TriangleMesh makePool(double R, int rings, const std::function<double(double, double)>& height,
+                             const Vec3d& center = Vec3d::Zero())
+{
+    const double pi = 3.14159265358979323846;
+    TriangleMesh mesh;
+    auto ringStart = [](int k) { return k == 0 ? 0 : 1 + 3 * k * (k - 1); }; // first vertex of ring k
+    const int perDisc = 1 + 3 * rings * (rings + 1);
+    for (int disc = 0; disc < 2; ++disc)
+        for (int k = 0; k <= rings; ++k) {
+            const int n = k == 0 ? 1 : 6 * k;
+            const double r = R * k / rings;
+            for (int i = 0; i < n; ++i) {
+                const double a = 2 * pi * i / n;
+                const double z = disc == 0 ? height(r, a) : 0.0;
+                mesh.vertices.emplace_back(float(center.x() + r * std::cos(a)), float(center.y() + r * std::sin(a)),
+                                           float(center.z() + z));
+            }
+        }
+    auto add = [&](int disc, uint32_t a, uint32_t b, uint32_t c) {
+        const uint32_t o = uint32_t(disc * perDisc);
+        if (disc == 0)
+            mesh.triangles.push_back({o + a, o + b, o + c});
+        else
+            mesh.triangles.push_back({o + a, o + c, o + b});
+    };
+    for (int disc = 0; disc < 2; ++disc)
+        for (int k = 0; k < rings; ++k) {
+            const int na = k == 0 ? 1 : 6 * k, nb = 6 * (k + 1);
+            const uint32_t sa = uint32_t(ringStart(k)), sb = uint32_t(ringStart(k + 1));
+            int i = 0, j = 0;
+            while (i < (k == 0 ? 0 : na) || j < nb) {
+                const double nextA = k == 0 ? 1e9 : double(i + 1) / na, nextB = double(j + 1) / nb;
+                const uint32_t ai = sa + uint32_t(i % na), bj = sb + uint32_t(j % nb);
+                if (nextB <= nextA && j < nb) {
+                    add(disc, ai, bj, sb + uint32_t((j + 1) % nb));
+                    ++j;
+                } else {
+                    add(disc, ai, bj, sa + uint32_t((i + 1) % na));
+                    ++i;
+                }
+            }
+        }
+    const int n = 6 * rings;
+    const uint32_t top = uint32_t(ringStart(rings)), bottom = uint32_t(perDisc + ringStart(rings));
+    for (int i = 0; i < n; ++i) {
+        const uint32_t t0 = top + uint32_t(i), t1 = top + uint32_t((i + 1) % n);
+        const uint32_t b0 = bottom + uint32_t(i), b1 = bottom + uint32_t((i + 1) % n);
+        mesh.triangles.push_back({t0, b0, b1});
+        mesh.triangles.push_back({t0, b1, t1});
+    }
+    computeVertexNormals(mesh);
+    return mesh;
+}
+
+/// A flat pool of depth h.
+inline TriangleMesh makeFlatPool(double R, double h, int rings)
+{
+    return makePool(R, rings, [h](double, double) { return h; });
+}
+
+} // namespace ferro::spiketest

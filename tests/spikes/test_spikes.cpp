@@ -1,0 +1,339 @@
+// ferro-spikes: the paper's hexagonal spikes on flat pools and in two-magnet fields, checked
+// against the analytic spacing, symmetry, field direction, eq. 16, volume and mesh health.
+#include "SpikeTestMeshes.hpp"
+
+#include "sim/SceneFile.hpp"
+#include "spikes/SpikeFrames.hpp"
+#include "spikes/SpikeMapper.hpp"
+#include "spikes/SurfaceGeometry.hpp"
+
+#include <catch2/catch.hpp>
+#include <Eigen/Geometry>
+
+#include <cmath>
+#include <map>
+#include <random>
+#include <sstream>
+
+using namespace ferro;
+using spiketest::makeFlatPool;
+
+namespace {
+
+constexpr double kPi = 3.14159265358979323846;
+constexpr double kDepth = 0.01;
+
+// A dish of radius R holding oil-based ferrofluid (chi0 1.5, Ms 35 kA/m), plus `extra` TOML.
+std::string sceneText(double R, const std::string& extra)
+{
+    std::ostringstream s;
+    s << "[fluid]\nrest_density = 1200.0\nviscosity = 5e-6\nsurface_tension = 0.025\n"
+      << "[[fluid.block]]\nshape = \"cylinder\"\ncenter = [0.0, 0.0, 0.0]\nradius = " << 0.99 * R
+      << "\nheight = 0.01\ncount = 2000\n"
+      << "[container]\ntype = \"dish\"\ncenter = [0.0, 0.0, 0.0]\nradius = " << R << "\nheight = 0.03\n"
+      << "[magnetization]\nsusceptibility = 1.5\nsaturation = 35000.0\n"
+      << extra;
+    return s.str();
+}
+
+std::string uniformField(double H)
+{
+    std::ostringstream s;
+    s << "[[magnets]]\nkind = \"uniform\"\ndirection = [0.0, 0.0, 1.0]\nfield = " << H << "\n";
+    return s.str();
+}
+
+SpikeScene scene(const std::string& text, const std::vector<std::string>& overrides = {})
+{
+    return parseSpikeScene(SceneDocument::parse(text, "test.toml", overrides));
+}
+
+SpikeInput frameInput(const SpikeScene& sc, const TriangleMesh& mesh, double time = 0.0)
+{
+    SpikeInput in;
+    in.surface = mesh;
+    in.fluid = sc.fluid;
+    for (const MagnetTrack& t : sc.magnets) in.magnets.push_back(t.at(time));
+    return in;
+}
+
+// The spike's axis measured on the output mesh: from the area-weighted centroid of its flank
+// (vertices raised 15-60 % of the apex's rise along the tip direction; troughs sink and are
+// left out; weighted by their undisplaced area, as a leaning spike stretches one side) to its
+// apex vertex. Vertices belong to the spike if their undisplaced position is
+// within 0.45 l of the tip's base (the troughs' centres are 0.577 l away).
+Vec3d measuredAxis(const SpikeResult& res, const SpikeTip& tip, double l)
+{
+    std::vector<double> area(res.refined.vertices.size(), 0.0);
+    for (const auto& t : res.refined.triangles) { // undisplaced areas: the same weight either side
+        const Vec3d a = res.refined.vertices[t[0]].cast<double>(), b = res.refined.vertices[t[1]].cast<double>(),
+                    c = res.refined.vertices[t[2]].cast<double>();
+        for (uint32_t v : t) area[v] += (b - a).cross(c - a).norm() / 6;
+    }
+    auto rise = [&](size_t v) {
+        return (res.mesh.vertices[v] - res.refined.vertices[v]).cast<double>().dot(tip.direction);
+    };
+    double best = -1;
+    size_t apex = 0;
+    std::vector<size_t> near;
+    for (size_t v = 0; v < res.refined.vertices.size(); ++v) {
+        if ((res.refined.vertices[v].cast<double>() - tip.base).norm() > 0.45 * l) continue;
+        near.push_back(v);
+        if (rise(v) > best) best = rise(v), apex = v;
+    }
+    Vec3d sum = Vec3d::Zero();
+    double weight = 0;
+    int count = 0;
+    for (size_t v : near)
+        if (rise(v) >= 0.15 * best && rise(v) <= 0.6 * best)
+            sum += area[v] * res.mesh.vertices[v].cast<double>(), weight += area[v], ++count;
+    REQUIRE(count >= 12);
+    return (res.mesh.vertices[apex].cast<double>() - sum / weight).normalized();
+}
+
+double angleDegrees(const Vec3d& a, const Vec3d& b)
+{
+    return std::acos(std::clamp(a.normalized().dot(b.normalized()), -1.0, 1.0)) * 180.0 / kPi;
+}
+
+void requireHealthy(const SpikeResult& res)
+{
+    const MeshHealth health = checkMeshHealth(res.mesh);
+    REQUIRE(health.loadable);
+    REQUIRE(health.closed);
+    REQUIRE_FALSE(health.selfIntersecting);
+    REQUIRE(std::abs(res.volumeOut - res.volumeIn) <= 0.005 * res.volumeIn);
+    REQUIRE(std::abs(enclosedVolume(res.mesh) - res.volumeIn) <= 0.005 * res.volumeIn);
+}
+
+} // namespace
+
+TEST_CASE("eq. 13 in lattice coordinates: tips 4 pi / (sqrt3 k) apart, mean zero", "[spikes][physics]")
+{
+    const double k = 50.0, l = tipSpacingForWavenumber(k);
+    REQUIRE(l == Approx(4 * kPi / (std::sqrt(3.0) * k)));
+    auto eq13 = [k](double x, double y) {
+        return std::cos(k / 2 * (std::sqrt(3.0) * x + y)) + std::cos(k / 2 * (std::sqrt(3.0) * x - y)) +
+               std::cos(k * y);
+    };
+    // e1 along x, e2 at 60 degrees: both forms agree everywhere.
+    std::mt19937 rng(3);
+    std::uniform_real_distribution<double> u(-3, 3);
+    for (int i = 0; i < 100; ++i) {
+        const double a = u(rng), b = u(rng);
+        const double x = l * (a + 0.5 * b), y = l * std::sqrt(0.75) * b;
+        REQUIRE(hexProfile(a, b) == Approx(eq13(x, y)).margin(1e-9));
+    }
+    REQUIRE(eq13(l, 0) == Approx(3.0));
+    REQUIRE(eq13(0.5 * l, std::sqrt(0.75) * l) == Approx(3.0));
+    REQUIRE(eq13(0, 2 * kPi / k) == Approx(-1.0)); // one wavelength of cos(k y) is no tip spacing
+    double mean = 0;
+    const int n = 200;
+    for (int i = 0; i < n; ++i)
+        for (int j = 0; j < n; ++j) mean += hexProfile((i + 0.5) / n, (j + 0.5) / n);
+    REQUIRE(mean / (n * n) == Approx(0.0).margin(1e-9));
+    REQUIRE(sharpenedProfile(3.0, 2.5) == Approx(3.0));
+    REQUIRE(sharpenedProfile(-1.5, 2.5) == Approx(-1.5));
+}
+
+TEST_CASE("eq. 16: Cowley-Rosensweig critical magnetization and wavelength", "[spikes][physics]")
+{
+    MagnetizationParams linear;
+    linear.susceptibility = 1.5;
+    const double rho = 1200, g = 9.81, sigma = 0.025;
+    const CriticalMagnetization c = criticalMagnetization(rho, g, sigma, linear);
+    const double r0 = 2.5; // sqrt(mu_c mu_t) / mu0 = 1 + chi for a linear fluid
+    REQUIRE(c.r0 == Approx(r0));
+    REQUIRE(c.magnetization == Approx(std::sqrt(2 / kMu0 * (1 + 1 / r0) * std::sqrt(g * rho * sigma))));
+    REQUIRE(c.magnetization == Approx(6182).epsilon(0.002)); // ~6.2 kA/m, typical of lab ferrofluids
+    REQUIRE(c.internalField == Approx(c.magnetization / 1.5));
+    REQUIRE(c.appliedField == Approx(c.internalField + c.magnetization));
+    // Saturating fluid: r0 from chord and tangent permeabilities at M_c, both below 1 + chi0.
+    MagnetizationParams langevin = linear;
+    langevin.saturation = 35000;
+    const CriticalMagnetization s = criticalMagnetization(rho, g, sigma, langevin);
+    REQUIRE(s.r0 < r0);
+    REQUIRE(s.magnetization > c.magnetization);
+    REQUIRE(fluidMagnetization(s.internalField, langevin) == Approx(s.magnetization));
+    // Saturation below M_c: never unstable.
+    langevin.saturation = 3000;
+    REQUIRE(std::isinf(criticalMagnetization(rho, g, sigma, langevin).magnetization));
+    REQUIRE(criticalWavelength(rho, g, sigma) == Approx(2 * kPi * std::sqrt(sigma / (rho * g))));
+    REQUIRE(criticalWavelength(rho, g, sigma) == Approx(9.16e-3).epsilon(0.005));
+}
+
+TEST_CASE("[spikes] section: defaults, overrides and unknown keys", "[spikes][scene]")
+{
+    const double R = 0.03;
+    SpikeScene sc = scene(sceneText(R, uniformField(15000) + "[spikes]\nalpha = 80.0\nspacing = \"physical\"\n"),
+                          {"spikes.beta=2e-7"});
+    REQUIRE(sc.params.alpha == 80.0);
+    REQUIRE(sc.params.beta == 2e-7);
+    REQUIRE(sc.params.spacing == SpikeParams::Spacing::Physical);
+    REQUIRE(sc.fluid.hasCenter);
+    REQUIRE_THROWS_AS(scene(sceneText(R, "[spikes]\nalpah = 80.0\n")), SceneError);
+    REQUIRE_THROWS_AS(scene(sceneText(R, "[spikes]\nsharpness = 0.5\n")), SceneError);
+    REQUIRE_THROWS_AS(scene(sceneText(R, "[spikes]\nspacing = \"wide\"\n")), SceneError);
+}
+
+TEST_CASE("flat pool in a vertical field: hexagonal tips at the analytic spacing, along the field",
+          "[spikes][pool]")
+{
+    const double R = 0.03, H0 = 15000;
+    const SpikeScene sc = scene(sceneText(R, uniformField(H0)));
+    const SpikeResult res = addSpikes(frameInput(sc, makeFlatPool(R, kDepth, 20)), sc.params);
+    REQUIRE(res.patterns.size() == 1);
+    const SpikePattern& pat = res.patterns[0];
+    REQUIRE((pat.origin - Vec3d(0, 0, kDepth)).norm() < 1e-6);
+    const double l = sc.params.alpha / H0; // eq. 15 with |H(x0)| = H0
+    REQUIRE(pat.spacing == Approx(l));
+    INFO("tips " << res.tips.size() << ", spacing " << l);
+    REQUIRE(res.tips.size() >= 19);
+
+    // Tip spacing: nearest neighbours of every tip within 2 l of the origin.
+    std::map<std::pair<int, int>, Vec3d> byIndex;
+    for (const SpikeTip& t : res.tips) byIndex[{t.i, t.j}] = t.base;
+    int checked = 0;
+    for (const SpikeTip& t : res.tips) {
+        if ((t.base - pat.origin).norm() > 2.01 * l) continue;
+        double nearest = 1e9;
+        for (const SpikeTip& u : res.tips)
+            if (&u != &t) nearest = std::min(nearest, (u.base - t.base).norm());
+        REQUIRE(nearest == Approx(l).epsilon(0.05));
+        ++checked;
+    }
+    REQUIRE(checked >= 19); // origin, ring 1 (6) and ring 2 (12)
+
+    // Six-fold symmetry about the origin: every tip rotated by 60 degrees lands on a tip.
+    for (const SpikeTip& t : res.tips) {
+        const Vec3d d = t.base - pat.origin;
+        const Vec3d rotated(0.5 * d.x() - std::sqrt(0.75) * d.y(), std::sqrt(0.75) * d.x() + 0.5 * d.y(), d.z());
+        double nearest = 1e9;
+        for (const SpikeTip& u : res.tips) nearest = std::min(nearest, (u.base - pat.origin - rotated).norm());
+        REQUIRE(nearest < 0.02 * l);
+    }
+    // The six ring-1 tips have equal heights (same field, same fades).
+    for (int k = 0; k < 6; ++k) {
+        const int ij[6][2] = {{1, 0}, {0, 1}, {-1, 1}, {-1, 0}, {0, -1}, {1, -1}};
+        bool found = false;
+        for (const SpikeTip& t : res.tips)
+            if (t.i == ij[k][0] && t.j == ij[k][1]) {
+                found = true;
+                REQUIRE(t.height == Approx(res.tips.front().height).epsilon(1e-6));
+            }
+        REQUIRE(found);
+    }
+
+    // Heights: eq. 14, tip = 3 C0 above the mean level for a full-strength tip.
+    REQUIRE(res.maxHeight == Approx(std::min(3 * sc.params.beta * H0, sc.params.maxAspect * l)).epsilon(0.01));
+    // Tips grow along the field (vertical), measured on the mesh.
+    for (const SpikeTip& t : res.tips) {
+        if ((t.base - pat.origin).norm() > 1.01 * l) continue;
+        REQUIRE(angleDegrees(t.direction, Vec3d(0, 0, 1)) < 1e-6);
+        REQUIRE(angleDegrees(measuredAxis(res, t, l), Vec3d(0, 0, 1)) < 5.0);
+    }
+    // The mesh peaks at the tips: the highest vertex near each tip is within an edge of it.
+    requireHealthy(res);
+}
+
+TEST_CASE("spacing shrinks and spikes grow as the field grows; none below M_c", "[spikes][pool]")
+{
+    const double R = 0.03;
+    const TriangleMesh pool = makeFlatPool(R, kDepth, 20);
+    auto run = [&](double H) {
+        const SpikeScene sc = scene(sceneText(R, uniformField(H)));
+        return addSpikes(frameInput(sc, pool), sc.params);
+    };
+    const SpikeResult weak = run(12000), strong = run(18000);
+    REQUIRE(weak.patterns.size() == 1);
+    REQUIRE(strong.patterns.size() == 1);
+    REQUIRE(strong.patterns[0].spacing < weak.patterns[0].spacing);
+    REQUIRE(strong.patterns[0].spacing == Approx(weak.patterns[0].spacing * 12000 / 18000));
+    REQUIRE(strong.maxHeight > weak.maxHeight);
+    REQUIRE(strong.tips.size() > weak.tips.size());
+
+    // M_c: the field whose magnetization (this fluid's law, no particles) is M_c.
+    const SpikeScene sc = scene(sceneText(R, uniformField(1000)));
+    const CriticalMagnetization c =
+        criticalMagnetization(1200 - sc.params.ambientDensity, 9.81, 0.025, sc.fluid.law);
+    const SpikeResult below = run(0.97 * c.internalField);
+    REQUIRE(below.tips.empty());
+    REQUIRE(below.patterns.empty());
+    REQUIRE(below.mesh.vertices == pool.vertices);
+    const SpikeResult above = run(1.1 * c.internalField);
+    REQUIRE_FALSE(above.tips.empty());
+    requireHealthy(above);
+}
+
+TEST_CASE("physical spacing: the critical wavelength", "[spikes][pool]")
+{
+    const double R = 0.03;
+    const SpikeScene sc = scene(sceneText(R, uniformField(15000) + "[spikes]\nspacing = \"physical\"\n"));
+    const SpikeResult res = addSpikes(frameInput(sc, makeFlatPool(R, kDepth, 20)), sc.params);
+    REQUIRE(res.patterns.size() == 1);
+    const double lambda = criticalWavelength(1200 - sc.params.ambientDensity, 9.81, 0.025);
+    // eq. 13 with k = 2 pi / lambda_c: tips 4 pi / (sqrt3 k) = 2 lambda_c / sqrt3 apart.
+    REQUIRE(res.patterns[0].spacing == Approx(2 / std::sqrt(3.0) * lambda));
+    for (const SpikeTip& t : res.tips) {
+        if (t.i != 1 || t.j != 0) continue;
+        REQUIRE((t.base - res.patterns[0].origin).norm() == Approx(res.patterns[0].spacing).epsilon(0.02));
+    }
+}
+
+TEST_CASE("temporal stability: a still magnet keeps the tips in place", "[spikes][stability]")
+{
+    const double R = 0.03;
+    const SpikeScene sc = scene(sceneText(R, uniformField(15000)));
+    const TriangleMesh frame1 = makeFlatPool(R, kDepth, 20);
+    // Frame 2: the same pool with the small surface noise of a settled SPH surface (20 um).
+    TriangleMesh frame2 = frame1;
+    std::mt19937 rng(7);
+    std::uniform_real_distribution<float> noise(-2e-5f, 2e-5f);
+    for (Vec3& v : frame2.vertices)
+        if (v.z() > 0.5f * float(kDepth)) v.z() += noise(rng);
+    const SpikeResult a = addSpikes(frameInput(sc, frame1, 0.0), sc.params);
+    const SpikeResult again = addSpikes(frameInput(sc, frame1, 1.0), sc.params);
+    const SpikeResult b = addSpikes(frameInput(sc, frame2, 1.0), sc.params);
+    REQUIRE(again.mesh.vertices == a.mesh.vertices); // deterministic
+    REQUIRE(a.tips.size() == b.tips.size());
+    const double l = a.patterns[0].spacing;
+    for (size_t i = 0; i < a.tips.size(); ++i) {
+        REQUIRE(a.tips[i].i == b.tips[i].i);
+        REQUIRE(a.tips[i].j == b.tips[i].j);
+        REQUIRE((a.tips[i].base - b.tips[i].base).norm() < 0.01 * l);
+    }
+}
+
+TEST_CASE("two magnets: each makes a pattern, tips lean along the field lines", "[spikes][two-magnets]")
+{
+    const double R = 0.045;
+    const std::string magnets =
+        "[[magnets]]\nkind = \"dipole\"\nposition = [-0.02, 0.0, -0.02]\ndirection = [0.0, 0.0, 1.0]\n"
+        "moment = 1.5\n"
+        "[[magnets]]\nkind = \"dipole\"\nposition = [0.025, 0.0, -0.025]\ndirection = [0.0, 0.0, 1.0]\n"
+        "moment = 1.5\n";
+    const SpikeScene sc = scene(sceneText(R, magnets), {"spikes.resolution=24"});
+    const SpikeResult res = addSpikes(frameInput(sc, makeFlatPool(R, kDepth, 30)), sc.params);
+    REQUIRE(res.patterns.size() == 2);
+    REQUIRE(res.patterns[0].origin.x() == Approx(-0.02).margin(1e-6));
+    REQUIRE(res.patterns[1].origin.x() == Approx(0.025).margin(1e-6));
+    SpikeInput in = frameInput(sc, makeFlatPool(R, kDepth, 30));
+    int checked = 0;
+    double worst = 0, maxTilt = 0;
+    for (const SpikeTip& t : res.tips) {
+        if (t.height < 0.5 * res.maxHeight) continue;
+        const Vec3d H = totalFieldAt(in, t.base);
+        REQUIRE(angleDegrees(t.direction, H) < 1.0); // blended with the other pattern near the border
+        const double l = res.patterns[size_t(t.pattern)].spacing;
+        const double angle = angleDegrees(measuredAxis(res, t, l), H);
+        worst = std::max(worst, angle);
+        if (angle > 5) INFO("tip " << t.pattern << " " << t.i << "," << t.j << " at " << t.base.transpose() << " h " << t.height << " angle " << angle);
+        maxTilt = std::max(maxTilt, angleDegrees(H, Vec3d(0, 0, 1)));
+        ++checked;
+    }
+    INFO("tips checked " << checked << ", worst angle " << worst << " deg, largest field tilt " << maxTilt);
+    REQUIRE(checked >= 7); // both origins and the ring around the stronger pattern
+    REQUIRE(maxTilt > 10.0); // the field really leans the spikes
+    REQUIRE(worst < 5.0);
+    requireHealthy(res);
+}
