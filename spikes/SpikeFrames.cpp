@@ -1,6 +1,7 @@
 #include "spikes/SpikeFrames.hpp"
 
 #include "sim/MagnetState.hpp"
+#include "sim/MagnetizationSolver.hpp"
 #include "sim/ParticleFile.hpp"
 #include "sim/SceneFile.hpp"
 
@@ -11,6 +12,7 @@
 #include <cmath>
 #include <cstdio>
 #include <exception>
+#include <memory>
 #include <iostream>
 #include <mutex>
 #include <sstream>
@@ -119,6 +121,21 @@ SpikeInput loadSpikeInput(const SpikeScene& scene, const std::string& surfacePat
             if (particles.column("mx") >= 0 && particles.column("my") >= 0 && particles.column("mz") >= 0) {
                 const std::vector<Vec3> M = particles.vec3("mx", "my", "mz");
                 for (size_t i = 0; i < M.size(); ++i) in.particles.magnetization[i] = double(M[i].norm());
+                if (scene.params.particleField && in.particles.spacing > 0) {
+                    // The magnetized particles' own field: each particle a sphere of its volume
+                    // m / rho = rho0 h^3 / rho (the simulator's model, sim/MagnetizationSolver.hpp).
+                    const int rho = particles.column("density");
+                    const double h3 = std::pow(in.particles.spacing, 3);
+                    std::vector<Real> volume(x.size(), Real(h3));
+                    if (rho >= 0)
+                        for (size_t i = 0; i < x.size(); ++i) {
+                            const double r = particles.at(i, rho);
+                            if (r > 0) volume[i] = Real(h3 * in.fluid.density / r);
+                        }
+                    auto evaluator = std::make_shared<ParticleFieldEvaluator>();
+                    evaluator->build(x, volume, M, 0.6);
+                    in.particleField = [evaluator](const Vec3d& p) { return evaluator->inducedField(p); };
+                }
             } else {
                 // Older files: the fluid's law in the magnets' field at the particle.
                 for (size_t i = 0; i < x.size(); ++i)
