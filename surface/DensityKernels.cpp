@@ -10,6 +10,9 @@
 #include <algorithm>
 #include <cmath>
 #include <limits>
+#include <map>
+#include <mutex>
+#include <tuple>
 #include <numeric>
 
 namespace ferro {
@@ -165,14 +168,15 @@ double densityAt(const std::vector<DensityKernel>& kernels, const Vec3& x) {
     return sum;
 }
 
-SurfaceCalibration calibrateSurface(const SurfaceParams& params, double spacing) {
+namespace {
+SurfaceCalibration calibrateUncached(const SurfaceParams& params, double spacing) {
     SurfaceCalibration cal;
     cal.isoLevel = params.isoLevel;
     if (params.method == SurfaceMethod::OpenVdb) {
         // ParticlesToLevelSet gives a distance field: spheres of one spacing radius reach half a
         // spacing beyond where a flat sheet's surface belongs.
         cal.isoLevel = 0;
-        cal.offset = params.volumeCorrection ? -0.5 * spacing : 0.0;
+        cal.offset = params.volumeCorrection ? -0.5 * spacing : 0.0; // an SDF: inward is negative
         return cal;
     }
     if (!params.volumeCorrection) return cal;
@@ -186,7 +190,12 @@ SurfaceCalibration calibrateSurface(const SurfaceParams& params, double spacing)
         for (int j = -half; j <= half; ++j)
             for (int k = 0; k < layers; ++k)
                 lattice.emplace_back(Real(i * spacing), Real(j * spacing), Real(k * spacing));
-    const std::vector<DensityKernel> kernels = buildKernels(lattice, params, spacing);
+    const std::vector<DensityKernel> all = buildKernels(lattice, params, spacing);
+    // Only kernels that reach the sampled columns matter.
+    std::vector<DensityKernel> kernels;
+    for (const DensityKernel& k : all)
+        if (std::abs(k.centre.x()) <= k.halfExtent.x() + spacing && std::abs(k.centre.y()) <= k.halfExtent.y() + spacing)
+            kernels.push_back(k);
     // Where the iso surface crosses columns through one lattice cell, scanning down from
     // above the sheet; the sheet's own surface is half a spacing above its top layer.
     const double top = (layers - 1) * spacing;
@@ -210,6 +219,29 @@ SurfaceCalibration calibrateSurface(const SurfaceParams& params, double spacing)
         }
     if (found > 0) cal.offset = top + 0.5 * spacing - sum / found;
     return cal;
+}
+} // namespace
+
+SurfaceCalibration calibrateSurface(const SurfaceParams& params, double spacing) {
+    // The calibration is scale free: computed once per parameter set at unit spacing and
+    // scaled, so a frame range pays for it once.
+    using Key = std::tuple<int, double, double, double, double, double, int, double, double, bool>;
+    const Key key{int(params.method), params.kernelRadius, params.neighborRadius, params.kr,
+                  params.ks * spacing * spacing, params.kn, params.nEps, params.lambda, params.isoLevel,
+                  params.volumeCorrection};
+    static std::mutex mutex;
+    static std::map<Key, SurfaceCalibration> cache;
+    {
+        std::lock_guard<std::mutex> lock(mutex);
+        auto it = cache.find(key);
+        if (it != cache.end()) return {it->second.isoLevel, it->second.offset * spacing};
+    }
+    SurfaceParams unit = params;
+    unit.ks = params.ks * spacing * spacing;
+    const SurfaceCalibration cal = calibrateUncached(unit, 1.0);
+    std::lock_guard<std::mutex> lock(mutex);
+    cache[key] = cal;
+    return {cal.isoLevel, cal.offset * spacing};
 }
 
 double estimateSpacing(const std::vector<Vec3>& positions) {

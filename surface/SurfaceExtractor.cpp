@@ -5,8 +5,10 @@
 
 #include <openvdb/openvdb.h>
 #include <openvdb/tools/Filter.h>
+#include <openvdb/tools/LevelSetRebuild.h>
 #include <openvdb/tools/MeshToVolume.h>
 #include <openvdb/tools/ParticlesToLevelSet.h>
+#include <openvdb/tools/ValueTransformer.h>
 #include <openvdb/tools/VolumeToMesh.h>
 
 #include <tbb/blocked_range.h>
@@ -252,8 +254,8 @@ struct ParticleList {
 };
 
 /// Quads split along the shorter diagonal, all polygons oriented outward (counter-clockwise
-/// seen from outside). volumeToMesh's polygons come out the other way round for both our
-/// density grids and OpenVDB's level sets (the tests check the sign of the volume), hence `flip`.
+/// seen from outside). volumeToMesh's polygons of a level set (inside below the iso value)
+/// come out the other way round (the tests check the sign of the volume), hence `flip`.
 TriangleMesh toTriangleMesh(std::vector<openvdb::Vec3s>& points, std::vector<openvdb::Vec3I>& tris,
                             std::vector<openvdb::Vec4I>& quads, bool flip) {
     TriangleMesh mesh;
@@ -344,41 +346,50 @@ TriangleMesh extractSurface(const std::vector<Vec3>& positions, const SurfacePar
         std::vector<openvdb::Vec3s> points;
         std::vector<openvdb::Vec3I> tris;
         std::vector<openvdb::Vec4I> quads;
-        FloatGrid::Ptr grid;
         const SurfaceCalibration cal = calibrateSurface(params, spacing);
-        double iso = cal.isoLevel;
-        const bool flip = true;
+        FloatGrid::Ptr grid;        // what volumeToMesh meshes at `iso`
+        double iso = 0;
         auto t0 = tbb::tick_count::now();
         if (params.method == SurfaceMethod::OpenVdb) {
-            // Union of spheres of one spacing radius (calibrateSurface moves it half a
-            // spacing inward, where a flat sheet's own surface lies).
-            const double band = 3.0;
-            grid = openvdb::createLevelSet<FloatGrid>(voxel, band);
+            grid = openvdb::createLevelSet<FloatGrid>(voxel, 3.0);
             openvdb::tools::ParticlesToLevelSet<FloatGrid> raster(*grid);
             raster.rasterizeSpheres(ParticleList{positions, spacing});
             raster.finalize(true);
             iso = 0;
             st.rasterSeconds = seconds(t0);
+            t0 = tbb::tick_count::now();
         } else {
             const std::vector<DensityKernel> kernels = buildKernels(positions, params, spacing);
             st.kernelSeconds = seconds(t0);
             t0 = tbb::tick_count::now();
             grid = rasterize(kernels, voxel);
             st.rasterSeconds = seconds(t0);
+            t0 = tbb::tick_count::now();
+            if (params.smoothing > 0) {
+                openvdb::tools::Filter<FloatGrid> filter(*grid);
+                filter.gaussian(1, params.smoothing);
+            }
+            // Negated, the density follows the level-set convention (inside below the iso
+            // value) that volumeToMesh and levelSetRebuild expect.
+            openvdb::tools::foreach(grid->beginValueOn(), [](const FloatGrid::ValueOnIter& it) { it.setValue(-*it); });
+            grid->setGridClass(openvdb::GRID_LEVEL_SET);
+            iso = -cal.isoLevel;
         }
-        t0 = tbb::tick_count::now();
-        if (params.smoothing > 0) {
-            openvdb::tools::Filter<FloatGrid> filter(*grid);
-            filter.gaussian(1, params.smoothing);
-        }
-        st.isoLevel = iso;
         st.leaves = grid->tree().leafCount();
         st.activeVoxels = grid->activeVoxelCount();
+        if (std::abs(cal.offset) > 0.05 * voxel) {
+            // Moving the surface along its normals must not fold it where it is concave (or
+            // convex, moving in): offset a true distance field, not the vertices. (Inside a
+            // union of spheres ParticlesToLevelSet's values are no distances either.)
+            const float outside = float(std::max(0.0, cal.offset) / voxel) + 2;
+            const float inside = float(std::max(0.0, -cal.offset) / voxel) + 2;
+            grid = openvdb::tools::levelSetRebuild(*grid, float(iso), outside, inside);
+            iso = cal.offset;
+        }
+        st.isoLevel = iso;
         openvdb::tools::volumeToMesh(*grid, points, tris, quads, iso, params.adaptivity);
-        mesh = toTriangleMesh(points, tris, quads, flip);
+        mesh = toTriangleMesh(points, tris, quads, /*flip=*/true);
         computeVertexNormals(mesh);
-        if (cal.offset != 0)
-            for (size_t i = 0; i < mesh.vertices.size(); ++i) mesh.vertices[i] += Real(cal.offset) * mesh.normals[i];
         st.offset = cal.offset;
         st.meshSeconds = seconds(t0);
     }
