@@ -22,7 +22,9 @@ std::string lookTemplate()
 //   (south -> north), FerroMagnetLength, FerroMagnetRadius, FerroMagnetStrength, and the
 //   objects FerroMagnetsNorth, FerroMagnetsSouth (each only if some magnet has that part).
 
-global_settings { assumed_gamma 1.0 max_trace_level 10 }
+// max_trace_level 5: reflections of reflections of reflections; 10 costs about 40 % more time
+// for no visible change on the opaque fluid.
+global_settings { assumed_gamma 1.0 max_trace_level 5 }
 #default { finish { ambient 0 diffuse 0.8 } }
 
 // ---- Camera ---------------------------------------------------------------------------
