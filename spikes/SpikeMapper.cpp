@@ -161,7 +161,16 @@ public:
         wallMargin_ = p.wallMargin > 0 ? p.wallMargin : (spacing_ > 0 ? 1.5 * spacing_ : 2e-3);
     }
 
-    Vec3d field(const Vec3d& x) const { return totalFieldAt(in_, x); }
+    /// H at a surface point x with outward normal n: the magnets at x, the particles' field a
+    /// little above x (two particle spacings out along n), where the discrete particles blur
+    /// into the continuum they stand for (right at the surface a single particle's near
+    /// field would turn the spikes every which way).
+    Vec3d field(const Vec3d& x, const Vec3d& n) const
+    {
+        Vec3d H = magnetField(in_.magnets, x);
+        if (in_.particleField) H += in_.particleField(x + 2.0 * spacing_ * n);
+        return H;
+    }
 
     /// |M| at a surface point: the particles' M around it, else the law at the local field.
     double magnetization(const Vec3d& x, const Vec3d& H) const
@@ -249,13 +258,14 @@ SpikeResult addSpikes(const SpikeInput& in, const SpikeParams& P)
     const size_t nIn = input.vertices.size();
 
     // 1. Wetted walls and the supercritical part of the input surface.
+    const std::vector<Vec3d> inputNormals = vertexNormals(input);
     std::vector<char> wettedIn(nIn, 0), activeIn(nIn, 0);
     std::vector<double> magnetizationIn(nIn, 0.0);
     tbb::parallel_for(size_t(0), nIn, [&](size_t v) {
         const Vec3d x = toD(input.vertices[v]);
         wettedIn[v] = fields.wetted(x);
         if (wettedIn[v]) return;
-        magnetizationIn[v] = fields.magnetization(x, fields.field(x));
+        magnetizationIn[v] = fields.magnetization(x, fields.field(x, inputNormals[v]));
         activeIn[v] = magnetizationIn[v] > Mc;
     });
     if (std::none_of(activeIn.begin(), activeIn.end(), [](char a) { return a != 0; })) return unchanged();
@@ -304,7 +314,7 @@ SpikeResult addSpikes(const SpikeInput& in, const SpikeParams& P)
             Vec3d hit, normal;
             if (nearestFreeHit(caster, input, wettedIn, x0, up, 1e-3 * diagonal + 1e-9, hit, normal)) n0 = normal;
         }
-        const Vec3d H0 = fields.field(x0);
+        const Vec3d H0 = fields.field(x0, n0);
         const double M0 = fields.magnetization(x0, H0);
         if (!(M0 > Mc)) continue;
         // The magnet must dominate its own origin (two coaxial magnets make one pattern).
@@ -348,11 +358,11 @@ SpikeResult addSpikes(const SpikeInput& in, const SpikeParams& P)
         };
         // The field line through x meets the surface: the next mapping coordinate.
         auto dropOnSurface = [&](const Vec3d& x, Vec3d& s, Vec3d& n) {
-            Vec3d H = fields.field(x);
+            Vec3d H = fields.field(x, n0);
             if (!(H.norm() > 0)) H = n0;
             return nearestFreeHit(caster, input, wettedIn, x, H, 0.75 * l, s, n);
         };
-        auto alive = [&](const Vec3d& s) { return fields.magnetization(s, fields.field(s)) > Mc; };
+        auto alive = [&](const Vec3d& s, const Vec3d& n) { return fields.magnetization(s, fields.field(s, n)) > Mc; };
         addTip(0, 0, x0, n0);
         const int maxRings = int(std::ceil(diagonal / l)) + 1;
         std::vector<Vec3d> axisTips[6], axisNormals[6];
@@ -373,7 +383,7 @@ SpikeResult addSpikes(const SpikeInput& in, const SpikeParams& P)
                 axisTips[k].push_back(s);
                 axisNormals[k].push_back(n);
                 addTip(ring * kAxis[k][0], ring * kAxis[k][1], s, n);
-                dead = alive(s) ? 0 : dead + 1;
+                dead = alive(s, n) ? 0 : dead + 1;
             }
         }
         for (int k = 0; k < 6; ++k) {
@@ -417,7 +427,7 @@ SpikeResult addSpikes(const SpikeInput& in, const SpikeParams& P)
             tip.toLattice = inverse.topRows<2>();
         }
         for (Tip& tip : pat.tips) {
-            const Vec3d H = fields.field(tip.position);
+            const Vec3d H = fields.field(tip.position, tip.normal);
             tip.amplitude = std::min(P.beta * H.norm(), P.maxAspect * l / 3.0) *
                             fields.magnetizationFade(fields.magnetization(tip.position, H));
             tip.direction = growthDirection(H, tip.normal, P.maxTilt);
@@ -480,7 +490,7 @@ SpikeResult addSpikes(const SpikeInput& in, const SpikeParams& P)
         weight = 0;
         direction = nx;
         if (fields.wetted(x)) return 0;
-        const Vec3d H = fields.field(x);
+        const Vec3d H = fields.field(x, nx);
         const double M = fields.magnetization(x, H);
         const double fade = fields.magnetizationGate(M) *
                             (wallGrid.empty() ? 1.0 : smoothstep01(wallGrid.nearestDistance(x, wallFade) / wallFade));

@@ -16,7 +16,7 @@ struct SpikeParams {
     };
     bool enabled = true;             ///< false: copy the surface unchanged
     Spacing spacing = Spacing::Paper;
-    double alpha = 100.0;            ///< eq. 15 constant [A]: l = 1 cm at |H(x0)| = 10 kA/m
+    double alpha = 60.0;             ///< eq. 15 constant [A]: l = 1 cm at |H(x0)| = 6 kA/m
     double beta = 1.5e-7;            ///< eq. 14 constant [m per A/m]: C0 = beta |H|; tips stand 3 C0
                                      ///< above the mean level, troughs 1.5 C0 below
     double minSpacing = 2e-3;        ///< clamp of l [m] (a huge field cannot shrink spikes to nothing)

@@ -43,8 +43,10 @@ std::string uniformField(double H)
     return s.str();
 }
 
-SpikeScene scene(const std::string& text, const std::vector<std::string>& overrides = {})
+// alpha = 100 A: tips 6.7 mm apart at 15 kA/m, a few rings in a 6 cm pool.
+SpikeScene scene(const std::string& text, std::vector<std::string> overrides = {})
 {
+    overrides.insert(overrides.begin(), "spikes.alpha=100");
     return parseSpikeScene(SceneDocument::parse(text, "test.toml", overrides));
 }
 
@@ -165,8 +167,9 @@ TEST_CASE("eq. 16: Cowley-Rosensweig critical magnetization and wavelength", "[s
 TEST_CASE("[spikes] section: defaults, overrides and unknown keys", "[spikes][scene]")
 {
     const double R = 0.03;
-    SpikeScene sc = scene(sceneText(R, uniformField(15000) + "[spikes]\nalpha = 80.0\nspacing = \"physical\"\n"),
-                          {"spikes.beta=2e-7"});
+    SpikeScene sc = parseSpikeScene(SceneDocument::parse(
+        sceneText(R, uniformField(15000) + "[spikes]\nalpha = 80.0\nspacing = \"physical\"\n"), "test.toml",
+        {"spikes.beta=2e-7"}));
     REQUIRE(sc.params.alpha == 80.0);
     REQUIRE(sc.params.beta == 2e-7);
     REQUIRE(sc.params.spacing == SpikeParams::Spacing::Physical);
