@@ -99,7 +99,43 @@ inline void fieldKernel(const float t[3], const Sources& s, size_t b, size_t e, 
 template <bool Inside>
 inline void gradientKernel(const float t[3], const Sources& s, size_t b, size_t e, float g[6]) {
     float acc[6] = {0, 0, 0, 0, 0, 0};
-    for (size_t i = b; i < e; ++i) {
+    size_t i = b;
+#ifdef FERRO_DIPOLE_SSE
+    if (e - b >= 4) {
+        const __m128 tx = _mm_set1_ps(t[0]), ty = _mm_set1_ps(t[1]), tz = _mm_set1_ps(t[2]);
+        const __m128 one = _mm_set1_ps(1.0f), three = _mm_set1_ps(3.0f), five = _mm_set1_ps(5.0f),
+                     two = _mm_set1_ps(2.0f), minR2 = _mm_set1_ps(kMinR2);
+        __m128 a[6] = {_mm_setzero_ps(), _mm_setzero_ps(), _mm_setzero_ps(),
+                       _mm_setzero_ps(), _mm_setzero_ps(), _mm_setzero_ps()};
+        for (; i + 4 <= e; i += 4) {
+            const __m128 dx = _mm_sub_ps(tx, _mm_loadu_ps(s.x + i));
+            const __m128 dy = _mm_sub_ps(ty, _mm_loadu_ps(s.y + i));
+            const __m128 dz = _mm_sub_ps(tz, _mm_loadu_ps(s.z + i));
+            const __m128 r2 = _mm_add_ps(_mm_add_ps(_mm_mul_ps(dx, dx), _mm_mul_ps(dy, dy)), _mm_mul_ps(dz, dz));
+            const __m128 inv = _mm_div_ps(one, _mm_sqrt_ps(_mm_max_ps(r2, minR2)));
+            const __m128 inv2 = _mm_mul_ps(inv, inv);
+            __m128 c5 = _mm_mul_ps(three, _mm_mul_ps(_mm_mul_ps(inv2, inv2), inv)); // 3/r^5
+            if (Inside) c5 = _mm_andnot_ps(_mm_cmplt_ps(r2, _mm_loadu_ps(s.a2 + i)), c5);
+            const __m128 c7 = _mm_mul_ps(five, _mm_mul_ps(c5, inv2)); // 15/r^7 (0 inside)
+            const __m128 mx = _mm_loadu_ps(s.mx + i), my = _mm_loadu_ps(s.my + i), mz = _mm_loadu_ps(s.mz + i);
+            const __m128 dot = _mm_add_ps(_mm_add_ps(_mm_mul_ps(dx, mx), _mm_mul_ps(dy, my)), _mm_mul_ps(dz, mz));
+            const __m128 tt = _mm_mul_ps(c5, dot), u = _mm_mul_ps(c7, dot);
+            const __m128 c52 = _mm_mul_ps(two, c5);
+            a[0] = _mm_add_ps(a[0], _mm_sub_ps(_mm_add_ps(tt, _mm_mul_ps(c52, _mm_mul_ps(dx, mx))), _mm_mul_ps(u, _mm_mul_ps(dx, dx))));
+            a[1] = _mm_add_ps(a[1], _mm_sub_ps(_mm_add_ps(tt, _mm_mul_ps(c52, _mm_mul_ps(dy, my))), _mm_mul_ps(u, _mm_mul_ps(dy, dy))));
+            a[2] = _mm_add_ps(a[2], _mm_sub_ps(_mm_add_ps(tt, _mm_mul_ps(c52, _mm_mul_ps(dz, mz))), _mm_mul_ps(u, _mm_mul_ps(dz, dz))));
+            a[3] = _mm_add_ps(a[3], _mm_sub_ps(_mm_mul_ps(c5, _mm_add_ps(_mm_mul_ps(dx, my), _mm_mul_ps(mx, dy))), _mm_mul_ps(u, _mm_mul_ps(dx, dy))));
+            a[4] = _mm_add_ps(a[4], _mm_sub_ps(_mm_mul_ps(c5, _mm_add_ps(_mm_mul_ps(dx, mz), _mm_mul_ps(mx, dz))), _mm_mul_ps(u, _mm_mul_ps(dx, dz))));
+            a[5] = _mm_add_ps(a[5], _mm_sub_ps(_mm_mul_ps(c5, _mm_add_ps(_mm_mul_ps(dy, mz), _mm_mul_ps(my, dz))), _mm_mul_ps(u, _mm_mul_ps(dy, dz))));
+        }
+        for (int k = 0; k < 6; ++k) {
+            alignas(16) float l[4];
+            _mm_store_ps(l, a[k]);
+            acc[k] = (l[0] + l[1]) + (l[2] + l[3]);
+        }
+    }
+#endif
+    for (; i < e; ++i) {
         const float dx = t[0] - s.x[i], dy = t[1] - s.y[i], dz = t[2] - s.z[i];
         const float r2 = dx * dx + dy * dy + dz * dz;
         if (Inside && r2 < s.a2[i]) continue;

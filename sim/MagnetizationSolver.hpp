@@ -18,6 +18,17 @@
 // maxIterations field evaluations. A warm start (H from the previous solve) cuts the work
 // to what the particles' and magnets' motion changed.
 //
+// Solvers (MagnetizationParams::solver):
+//   External  M = M(H_ext) alone, O(N); error ~ the neglected particle field (~chi/(1+chi)).
+//   Direct    exact all-pairs products, O(N^2) per field evaluation: the reference.
+//   Tree      Barnes-Hut products (sim/DipoleTree.hpp), opening angle theta = cell size /
+//             distance; at the default 0.5 the field is within ~0.2 % RMS of Direct on a
+//             40,960-particle dish layer at ~1/25 of its cost (bench-magnetization).
+//   Auto      External if its sampled error is under `tolerance`, else Direct up to
+//             directLimit() particles, else Tree (theta tightened, warm-started, up to twice
+//             if the sampled tree error exceeds the tolerance). Stats::solver says which.
+// A typical solve takes ~9 field evaluations cold and ~4 warm-started after a small step.
+//
 // Units: SI throughout (A/m, m, m^3); positions and results float, internals double.
 #include "sim/DipoleTree.hpp"
 #include "sim/MagnetField.hpp"

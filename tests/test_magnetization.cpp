@@ -459,6 +459,17 @@ TEST_CASE("Auto picks the cheapest accurate solver; nothing runs without magnets
         REQUIRE(J.size() == big.size());
     }
     {
+        MagnetizationSolver s(params(Solver::Tree, 1.5, 3e4));
+        std::vector<Vec3> none, Hn, Mn;
+        const auto st = s.solve(none, {}, magnets, Hn, Mn);
+        REQUIRE(st.skipped);
+        REQUIRE((Hn.empty() && Mn.empty()));
+        // a single particle: its own sphere's field only, H = 3 H0 / (3 + chi) as a lone sphere
+        std::vector<Vec3> one{Vec3(0, 0, 0)}, H1, M1;
+        s.solve(one, {1e-9f}, {uniformField(Vec3d(0, 1, 0), 100)}, H1, M1);
+        REQUIRE(H1[0].y() == Approx(300 / 4.5).epsilon(1e-3));
+    }
+    {
         MagnetizationSolver s(params(Solver::Direct, 0.0, 0)); // not magnetic: H is the magnets' own
         const auto st = s.solve(big, Vb, magnets, H, M);
         REQUIRE(st.skipped);
