@@ -268,7 +268,7 @@ void MagnetizationSolver::solveSelfConsistent(DipoleTree& tree, bool useTree, co
 
 MagnetizationSolver::Stats MagnetizationSolver::solve(const std::vector<Vec3>& x, const std::vector<Real>& volume,
                                                       const std::vector<Magnet>& magnets, std::vector<Vec3>& H,
-                                                      std::vector<Vec3>& M) {
+                                                      std::vector<Vec3>& M, std::vector<Eigen::Matrix3f>* J) {
     const auto t0 = Clock::now();
     Stats stats;
     const size_t n = x.size();
@@ -276,8 +276,10 @@ MagnetizationSolver::Stats MagnetizationSolver::solve(const std::vector<Vec3>& x
     const bool warm = H.size() == n;
     H.resize(n);
     M.assign(n, Vec3::Zero());
+    if (J) J->assign(n, Eigen::Matrix3f::Zero());
     if (magnets.empty() || n == 0 || !params_.enabled()) {
         stats.skipped = true;
+        lastSolver_ = Solver::External;
         if (magnets.empty() || n == 0) {
             std::fill(H.begin(), H.end(), Vec3::Zero());
         } else { // non-magnetic fluid: the field is the magnets' alone
@@ -295,9 +297,8 @@ MagnetizationSolver::Stats MagnetizationSolver::solve(const std::vector<Vec3>& x
     Solver solver = params_.solver;
     double theta = params_.openingAngle > 0 ? params_.openingAngle : 0.5;
 
-    DipoleTree tree;
-    const bool mayUseTree = solver == Solver::Tree || (solver == Solver::Auto && n > directLimit());
-    tree.build(x, volume, mayUseTree ? theta : 0.0);
+    DipoleTree tree; // Auto builds the interaction lists only once it has picked Tree
+    tree.build(x, volume, solver == Solver::Tree ? theta : 0.0);
     const std::vector<uint32_t>& order = tree.order();
 
     VecX Hext(3 * n), Hs(3 * n);
@@ -345,6 +346,7 @@ MagnetizationSolver::Stats MagnetizationSolver::solve(const std::vector<Vec3>& x
             Hs = Hext;
         } else {
             solver = n > directLimit() ? Solver::Tree : Solver::Direct;
+            if (solver == Solver::Tree) tree.build(x, volume, theta);
         }
     }
     if (solver == Solver::Direct || solver == Solver::Tree) {
@@ -381,6 +383,7 @@ MagnetizationSolver::Stats MagnetizationSolver::solve(const std::vector<Vec3>& x
         }
     }
     (void)extNorm;
+    lastSolver_ = stats.solver;
 
     // Back to the caller's order, float.
     tbb::parallel_for(tbb::blocked_range<size_t>(0, n, 4096), [&](const tbb::blocked_range<size_t>& r) {
@@ -392,8 +395,36 @@ MagnetizationSolver::Stats MagnetizationSolver::solve(const std::vector<Vec3>& x
             M[i] = (langevinSecant(h.norm(), chi0, Ms) * h).cast<Real>();
         }
     });
+    if (J) { // Jacobians at the solution, on the same tree
+        std::vector<Mat3f> Js;
+        if (stats.solver != Solver::External) {
+            VecX Mfinal;
+            magnetizationOf(Hs, chi0, Ms, Mfinal);
+            tree.setMagnetization(Mfinal);
+            tree.gradientAtParticles(Js, stats.solver == Solver::Tree);
+        }
+        addMagnetGradients(x, magnets, order, Js, *J);
+    }
     stats.seconds = std::chrono::duration<double>(Clock::now() - t0).count();
     return stats;
+}
+
+void MagnetizationSolver::addMagnetGradients(const std::vector<Vec3>& x, const std::vector<Magnet>& magnets,
+                                             const std::vector<uint32_t>& order, const std::vector<Mat3f>& Js,
+                                             std::vector<Eigen::Matrix3f>& J) {
+    const size_t n = x.size();
+    J.assign(n, Eigen::Matrix3f::Zero());
+    tbb::parallel_for(tbb::blocked_range<size_t>(0, n, 1024), [&](const tbb::blocked_range<size_t>& r) {
+        for (size_t k = r.begin(); k < r.end(); ++k) {
+            const size_t i = order.empty() ? k : order[k];
+            Mat3d g = ferro::fieldGradient(magnets, Vec3d(x[i].cast<double>()));
+            if (!g.allFinite()) g.setZero();
+            Eigen::Matrix3f total = g.cast<float>();
+            if (k < Js.size()) total += Js[k];
+            if (!total.allFinite()) total.setZero();
+            J[i] = total;
+        }
+    });
 }
 
 void MagnetizationSolver::fieldGradient(const std::vector<Vec3>& x, const std::vector<Real>& volume,
@@ -402,23 +433,19 @@ void MagnetizationSolver::fieldGradient(const std::vector<Vec3>& x, const std::v
     const size_t n = x.size();
     J.assign(n, Eigen::Matrix3f::Zero());
     if (magnets.empty() || n == 0 || !params_.enabled()) return;
-    const bool useTree = params_.solver == Solver::Tree || (params_.solver == Solver::Auto && n > directLimit());
+    Solver kind = params_.solver;
+    if (kind == Solver::Auto) kind = lastSolver_ ? *lastSolver_ : (n > directLimit() ? Solver::Tree : Solver::Direct);
+    if (kind == Solver::External) { // the particles' own field is neglected, its gradient too
+        addMagnetGradients(x, magnets, {}, {}, J);
+        return;
+    }
+    const bool useTree = kind == Solver::Tree;
     DipoleTree tree;
     tree.build(x, volume, useTree ? (params_.openingAngle > 0 ? params_.openingAngle : 0.5) : 0.0);
     tree.setMagnetizationUnsorted(M);
     std::vector<Mat3f> Js;
     tree.gradientAtParticles(Js, useTree);
-    const std::vector<uint32_t>& order = tree.order();
-    tbb::parallel_for(tbb::blocked_range<size_t>(0, n, 1024), [&](const tbb::blocked_range<size_t>& r) {
-        for (size_t k = r.begin(); k < r.end(); ++k) {
-            const size_t i = order[k];
-            Mat3d g = ferro::fieldGradient(magnets, Vec3d(x[i].cast<double>()));
-            if (!g.allFinite()) g.setZero();
-            Eigen::Matrix3f total = g.cast<float>() + Js[k];
-            if (!total.allFinite()) total.setZero();
-            J[i] = total;
-        }
-    });
+    addMagnetGradients(x, magnets, tree.order(), Js, J);
 }
 
 // ---------------------------------------------------------------------------------------

@@ -37,6 +37,7 @@
 
 #include <Eigen/Core>
 
+#include <optional>
 #include <vector>
 
 namespace ferro {
@@ -84,17 +85,21 @@ public:
     /// [m^3] (mass / density) in the field of `magnets`. H and M are resized to x.size();
     /// when H already has that size it is the starting guess (warm start; non-finite
     /// entries are replaced by the external field). Returns immediately with H = M = 0
-    /// when params.susceptibility <= 0, magnets is empty or x is empty. Never returns
-    /// non-finite values for finite inputs (coincident particles, particles on a pole).
+    /// when magnets or x are empty; with chi0 <= 0 (not magnetic) M = 0 and H is the
+    /// magnets' field (O(N), no particle field). Never returns non-finite values for
+    /// finite inputs (coincident particles, particles on a pole). If J is given it receives
+    /// the total-field Jacobians at the solution (see fieldGradient()), computed on the same
+    /// tree (one build instead of two).
     Stats solve(const std::vector<Vec3>& x, const std::vector<Real>& volume, const std::vector<Magnet>& magnets,
-                std::vector<Vec3>& H, std::vector<Vec3>& M);
+                std::vector<Vec3>& H, std::vector<Vec3>& M, std::vector<Eigen::Matrix3f>* J = nullptr);
 
     /// J[i](a, b) = dH_a / dx_b [A/m^2] of the TOTAL field at particle i: the magnets'
     /// analytic Jacobian plus the field of all other particles with magnetization M (as
-    /// solved). Tree-accelerated (opening angle of the params) when the solver is Tree,
-    /// or Auto with more than directLimit() particles; exact all-pairs otherwise. The
-    /// Kelvin force on particle i is mu0 V_i J_i M_i. J is resized to x.size(); zero
-    /// when nothing is magnetic (see solve()).
+    /// solved). The particle part follows the solver: Tree -> tree (opening angle of the
+    /// params), Direct -> exact all pairs, External -> none (its model neglects the particle
+    /// field), Auto -> what the last solve() picked (before any solve: Tree above
+    /// directLimit() particles, else Direct). The Kelvin force on particle i is
+    /// mu0 V_i J_i M_i. J is resized to x.size(); zero when nothing is magnetic.
     void fieldGradient(const std::vector<Vec3>& x, const std::vector<Real>& volume,
                        const std::vector<Magnet>& magnets, const std::vector<Vec3>& M,
                        std::vector<Eigen::Matrix3f>& J) const;
@@ -107,7 +112,11 @@ private:
     // Newton-GMRES on a built tree, sorted order. Returns iterations etc. in stats.
     void solveSelfConsistent(DipoleTree& tree, bool useTree, const Eigen::VectorXd& Hext, Eigen::VectorXd& H,
                              Stats& stats) const;
+    static void addMagnetGradients(const std::vector<Vec3>& x, const std::vector<Magnet>& magnets,
+                                   const std::vector<uint32_t>& order, const std::vector<Mat3f>& Js,
+                                   std::vector<Eigen::Matrix3f>& J);
     MagnetizationParams params_;
+    std::optional<Solver> lastSolver_; // what the last solve() ran (Auto's pick)
 };
 
 /// Total or induced field anywhere from a saved particle state (positions, volumes, M as

@@ -335,6 +335,26 @@ TEST_CASE("Field gradients match finite differences of the field", "[magnetizati
     INFO("direct " << std::sqrt(num / den) << " tree " << std::sqrt(numT / den));
     REQUIRE(std::sqrt(num / den) < 1e-4);
     REQUIRE(std::sqrt(numT / den) < 0.02);
+
+    // solve() can return the Jacobians at its solution: the same as fieldGradient() after it.
+    std::vector<Vec3> Ht, Mt;
+    std::vector<Eigen::Matrix3f> Jsolve, Jafter;
+    treeSolver.solve(x, V, magnets, Ht, Mt, &Jsolve);
+    treeSolver.fieldGradient(x, V, magnets, Mt, Jafter);
+    REQUIRE(Jsolve.size() == x.size());
+    double d = 0, r = 0;
+    for (size_t i = 0; i < x.size(); ++i) {
+        d += (Jsolve[i] - Jafter[i]).cast<double>().squaredNorm();
+        r += Jafter[i].cast<double>().squaredNorm();
+    }
+    REQUIRE(std::sqrt(d / r) < 1e-5);
+    // External neglects the particle field, and with it the particle part of the gradient.
+    MagnetizationSolver external(params(Solver::External, 1.5, 3e4));
+    std::vector<Eigen::Matrix3f> Je;
+    external.fieldGradient(x, V, magnets, M, Je);
+    for (size_t i = 0; i < x.size(); i += 211)
+        REQUIRE((Je[i].cast<double>() - fieldGradient(magnets, x[i].cast<double>())).norm() <
+                1e-5 * Je[i].norm());
 }
 
 TEST_CASE("Far from the fluid its field is the dipole of its total moment", "[magnetization]") {
