@@ -285,12 +285,8 @@ void writeLevelSet(const std::string& path, const TriangleMesh& mesh, double vox
     initOpenVdb();
     auto xform = openvdb::math::Transform::createLinearTransform(voxelSize);
     std::vector<openvdb::Vec3s> points(mesh.vertices.size());
-    for (size_t i = 0; i < points.size(); ++i) {
-        // meshToLevelSet wants index-space points.
-        const openvdb::Vec3d p = xform->worldToIndex(
-            openvdb::Vec3d(mesh.vertices[i].x(), mesh.vertices[i].y(), mesh.vertices[i].z()));
-        points[i] = openvdb::Vec3s(float(p.x()), float(p.y()), float(p.z()));
-    }
+    for (size_t i = 0; i < points.size(); ++i)
+        points[i] = openvdb::Vec3s(mesh.vertices[i].x(), mesh.vertices[i].y(), mesh.vertices[i].z());
     std::vector<openvdb::Vec3I> tris(mesh.triangles.size());
     for (size_t t = 0; t < tris.size(); ++t)
         tris[t] = openvdb::Vec3I(mesh.triangles[t][0], mesh.triangles[t][1], mesh.triangles[t][2]);
