@@ -28,8 +28,9 @@
 // ~400 particles per target (see tests/bench_magnetization.cpp).
 //
 // Numbers. Positions and moments are float inside (SoA, SSE kernels), scaled by the mean
-// particle radius so that float ranges do not depend on the scene's units; sums per target
-// are float over blocks and double across blocks; point evaluations are double.
+// particle radius so that float ranges do not depend on the scene's units. All-pairs sums
+// are float within blocks of 4,096 sources and double across blocks; a tree sum (a few
+// hundred terms) is float; point evaluations (fieldAt, gradientAt) are double throughout.
 // Evaluation is deterministic: every target sums its sources in a fixed order.
 #include "sim/Types.hpp"
 
