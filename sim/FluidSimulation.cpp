@@ -332,7 +332,11 @@ FluidSimulation::FluidSimulation(const SimScene& scene)
     if (scene_.fluid.surfaceTension > 0)
         capillaryDt_ = std::sqrt(rho0_ * spacing_ * spacing_ * spacing_ / (2 * kPi * scene_.fluid.surfaceTension));
 
+    if (!scene_.magnets.empty()) magnetics_ = std::make_unique<FluidMagnetics>(scene_, volume_, spacing_);
+
     sortAndSearch();
+    // The field of the initial state, so that frame 0 carries H and M too.
+    if (magnetics_) magnetics_->update(time_, x_, fluidNbr_, true);
 }
 
 FluidSimulation::~FluidSimulation() = default;
@@ -345,6 +349,7 @@ void FluidSimulation::sortAndSearch() {
     permute(id_, order_);
     permute(kappaV_, order_);
     permute(p_, order_);
+    if (magnetics_) magnetics_->permute(order_);
     grid_.index(x_, grid_.geometry());
     splitCoordinates(x_, px_, py_, pz_);
 
@@ -457,11 +462,16 @@ double FluidSimulation::chooseTimeStep(double dtLimit) const {
         },
         [](Real a, Real b) { return std::max(a, b); });
     const double speed = std::sqrt(double(vmax));
+    // Force criterion (Monaghan 1992): dt <= 0.25 sqrt(h / |a|). Gravity alone never binds
+    // at SPH spacings; a strong Kelvin force near a magnet pole does. Both are known at the
+    // step's start, so the step stays a pure function of the state (exact resume).
+    const double amax = scene_.solver.gravity.norm() + (magnetics_ ? magnetics_->maxAcceleration() : 0.0);
     const SolverParams& sp = scene_.solver;
     double dt = sp.maxDt;
     if (sp.kind == SolverParams::Kind::WCSPH) dt = std::min(dt, sp.cfl * spacing_ / (soundSpeed_ + speed));
     else if (speed > 0) dt = std::min(dt, sp.cfl * spacing_ / speed);
     dt = std::min(dt, capillaryDt_);
+    if (amax > 0) dt = std::min(dt, 0.25 * std::sqrt(h_ / amax));
     if (viscosity_ > 0) dt = std::min(dt, 0.125 * h_ * h_ / viscosity_);
     if (dt < sp.minDt) {
         std::ostringstream msg;
@@ -526,6 +536,7 @@ void FluidSimulation::nonPressureAccelerations(double dt) {
         }
         a_[i] = acc;
     });
+    if (magnetics_) magnetics_->addKelvinAcceleration(a_);
 }
 
 void FluidSimulation::stepWCSPH(double dt) {
@@ -698,6 +709,12 @@ void FluidSimulation::integratePositions(double dt) {
 }
 
 double FluidSimulation::step(double dtLimit) {
+    if (magnetics_) {
+        // The field at the step's start; the induced part is re-solved at every frame
+        // start (so a resumed run continues exactly) and whenever it has gone stale.
+        magnetics_->update(time_, x_, fluidNbr_, frameStart_);
+        frameStart_ = false;
+    }
     const double dt = chooseTimeStep(dtLimit);
     if (scene_.solver.kind == SolverParams::Kind::WCSPH) {
         stepWCSPH(dt);
@@ -721,6 +738,7 @@ void FluidSimulation::advanceTo(double tEnd) {
     // from a frame file (positions, velocities, pressures) continues exactly like an
     // uninterrupted one. It converges in a few iterations from zero.
     std::fill(kappaV_.begin(), kappaV_.end(), Real(0));
+    frameStart_ = true;
     while (time_ < tEnd) {
         step(tEnd - time_);
         if (tEnd - time_ < 1e-12 * std::max(1.0, tEnd)) time_ = tEnd;
@@ -740,9 +758,22 @@ std::vector<Vec3> FluidSimulation::positionsById() const { return byId(x_, id_);
 std::vector<Vec3> FluidSimulation::velocitiesById() const { return byId(v_, id_); }
 std::vector<Real> FluidSimulation::densitiesById() const { return byId(rho_, id_); }
 std::vector<Real> FluidSimulation::pressuresById() const { return byId(p_, id_); }
+std::vector<Vec3> FluidSimulation::fieldById() const {
+    if (!magnetics_ || magnetics_->field().size() != x_.size()) return std::vector<Vec3>(x_.size(), Vec3::Zero());
+    return byId(magnetics_->field(), id_);
+}
+std::vector<Vec3> FluidSimulation::magnetizationById() const {
+    if (!magnetics_ || magnetics_->magnetization().size() != x_.size())
+        return std::vector<Vec3>(x_.size(), Vec3::Zero());
+    return byId(magnetics_->magnetization(), id_);
+}
+std::vector<Magnet> FluidSimulation::magnetsNow() const {
+    return magnetics_ ? magnetics_->softenedMagnetsAt(time_) : std::vector<Magnet>{};
+}
 
 void FluidSimulation::setState(double time, const std::vector<Vec3>& xById, const std::vector<Vec3>& vById,
-                               const std::vector<Real>& pById) {
+                               const std::vector<Real>& pById, const std::vector<Vec3>& HById,
+                               const std::vector<Vec3>& MById) {
     if (xById.size() != x_.size() || vById.size() != x_.size() || (!pById.empty() && pById.size() != x_.size()))
         throw SimulationError("state has " + std::to_string(xById.size()) + " particles, the scene makes " +
                               std::to_string(x_.size()));
@@ -753,6 +784,8 @@ void FluidSimulation::setState(double time, const std::vector<Vec3>& xById, cons
     else p_ = pById;
     time_ = time;
     std::fill(kappaV_.begin(), kappaV_.end(), Real(0));
+    if (magnetics_ && HById.size() == x_.size() && MById.size() == x_.size())
+        magnetics_->setState(HById, MById);   // id order = current order until the sort below
     sortAndSearch();
 }
 

@@ -9,6 +9,7 @@
 // (no parallel floating-point reductions whose order varies), so runs are repeatable
 // and resume bit-for-bit from a frame file.
 #include "sim/Container.hpp"
+#include "sim/FluidMagnetics.hpp"
 #include "sim/Kernel.hpp"
 #include "sim/NeighborSearch.hpp"
 #include "sim/SimParams.hpp"
@@ -72,10 +73,24 @@ public:
     std::vector<Vec3> velocitiesById() const;
     std::vector<Real> densitiesById() const;   ///< kg/m^3, as of the last neighbour update
     std::vector<Real> pressuresById() const;   ///< Pa, from the last pressure solve
+    /// Total field H and magnetization M [A/m] as of the last step (zero without magnets).
+    std::vector<Vec3> fieldById() const;
+    std::vector<Vec3> magnetizationById() const;
     /// Replaces the state (resume): time, positions, velocities and pressures (the DFSPH
-    /// warm start; may be empty) in id order.
+    /// warm start; may be empty) in id order, and optionally H and M (the magnetization
+    /// solve's warm start; may be empty).
     void setState(double time, const std::vector<Vec3>& xById, const std::vector<Vec3>& vById,
-                  const std::vector<Real>& pById);
+                  const std::vector<Real>& pById, const std::vector<Vec3>& HById = {},
+                  const std::vector<Vec3>& MById = {});
+    /// The magnetic part of the step; nullptr when the scene has no magnets.
+    const FluidMagnetics* magnetics() const { return magnetics_.get(); }
+    void resetMagneticsCounters() { if (magnetics_) magnetics_->resetCounters(); }
+    /// The magnetization re-solve interval (see FluidMagnetics), 0 without magnetics.
+    size_t magnetizationInterval() const { return magnetics_ ? magnetics_->resolveInterval() : 0; }
+    void setMagnetizationInterval(size_t steps) { if (magnetics_ && steps > 0) magnetics_->setResolveInterval(steps); }
+    /// The magnets at the current time as the particles feel them (softened over at least
+    /// one spacing; empty without magnets).
+    std::vector<Magnet> magnetsNow() const;
 
     // Sorted-order access for diagnostics and tests.
     const std::vector<Vec3>& positions() const { return x_; }
@@ -101,6 +116,8 @@ private:
 
     SimScene scene_;
     std::unique_ptr<Container> container_;
+    std::unique_ptr<FluidMagnetics> magnetics_;  // only when the scene has magnets
+    bool frameStart_ = true;                     // the next step starts a frame: re-solve M
     CubicSplineKernel kernel_;
     CohesionKernel cohesion_;
     double spacing_ = 0, h_ = 0, mass_ = 0, volume_ = 0, rho0_ = 0;

@@ -766,6 +766,7 @@ MagnetizationParams parseMagnetization(const SceneDocument& doc)
         r.fail("opening_angle", "must be in (0, 1.5) (got " + formatNumber(p.openingAngle) + ")");
     p.resolveEvery = intInRange(r, "resolve_every", p.resolveEvery, 0, INT_MAX);
     p.maxIterations = intInRange(r, "max_iterations", p.maxIterations, 1, 10000);
+    p.inducedForce = r.boolean("induced_force", p.inducedForce);
     r.finish();
     return p;
 }

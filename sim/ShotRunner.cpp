@@ -1,6 +1,7 @@
 #include "sim/ShotRunner.hpp"
 
 #include "sim/FluidSimulation.hpp"
+#include "sim/MagnetState.hpp"
 #include "sim/ParticleFile.hpp"
 #include "sim/SceneFile.hpp"
 
@@ -49,13 +50,25 @@ std::vector<int> existingFrames(const std::string& dir) {
     return frames;
 }
 
+std::string magnetSummary(const FluidSimulation& sim) {
+    const FluidMagnetics* fm = sim.magnetics();
+    if (!fm) return {};
+    std::ostringstream o;
+    o << ", " << sim.scene().magnets.size() << " magnet" << (sim.scene().magnets.size() == 1 ? "" : "s");
+    if (fm->magnetic()) o << ", chi0 " << fm->law().susceptibility << ", Ms " << fm->law().saturation << " A/m";
+    else o << " (fluid not magnetic: magnetization.susceptibility = 0)";
+    return o.str();
+}
+
 ParticleTable frameTable(const FluidSimulation& sim, int frame, const RunOptions& opt) {
     ParticleTable t;
-    t.names = {"x", "y", "z", "vx", "vy", "vz", "density", "pressure"};
+    t.names = {"x", "y", "z", "vx", "vy", "vz", "density", "pressure", "hx", "hy", "hz", "mx", "my", "mz"};
     const auto x = sim.positionsById();
     const auto v = sim.velocitiesById();
     const auto rho = sim.densitiesById();
     const auto p = sim.pressuresById();
+    const auto H = sim.fieldById();
+    const auto M = sim.magnetizationById();
     const size_t n = x.size();
     t.values.resize(n * t.names.size());
     for (size_t i = 0; i < n; ++i) {
@@ -64,6 +77,8 @@ ParticleTable frameTable(const FluidSimulation& sim, int frame, const RunOptions
         row[3] = v[i].x(); row[4] = v[i].y(); row[5] = v[i].z();
         row[6] = rho[i];
         row[7] = p[i];
+        row[8] = H[i].x(); row[9] = H[i].y(); row[10] = H[i].z();
+        row[11] = M[i].x(); row[12] = M[i].y(); row[13] = M[i].z();
     }
     auto num = [](double d) {
         std::ostringstream o;
@@ -81,6 +96,11 @@ ParticleTable frameTable(const FluidSimulation& sim, int frame, const RunOptions
     t.setComment("rest_density", num(sim.restDensity()));
     t.setComment("scene", sim.scene().path);
     t.setComment("scene_fingerprint", opt.fingerprint);
+    // The magnets at this frame's time and the fluid's law: later stages evaluate the same
+    // field anywhere from the file alone.
+    writeMagnetComments(t, sim.magnetsNow(), &sim.scene().magnetization);
+    if (sim.magnetizationInterval() > 0)
+        t.setComment("magnetization_interval", std::to_string(sim.magnetizationInterval()));
     return t;
 }
 
@@ -126,7 +146,13 @@ void runShot(const SimScene& scene, const RunOptions& opt) {
         std::vector<Real> pressure;
         if (const int col = t.column("pressure"); col >= 0)
             for (size_t i = 0; i < t.rows(); ++i) pressure.push_back(t.at(i, col));
-        sim.setState(*it / fps, t.vec3("x", "y", "z"), t.vec3("vx", "vy", "vz"), pressure);
+        std::vector<Vec3> H, M;
+        if (t.column("hx") >= 0 && t.column("mx") >= 0) {
+            H = t.vec3("hx", "hy", "hz");
+            M = t.vec3("mx", "my", "mz");
+        }
+        sim.setState(*it / fps, t.vec3("x", "y", "z"), t.vec3("vx", "vy", "vz"), pressure, H, M);
+        sim.setMagnetizationInterval(size_t(t.commentNumber("magnetization_interval", 0)));
         frame = *it;
         resumed = true;
         break;
@@ -139,7 +165,8 @@ void runShot(const SimScene& scene, const RunOptions& opt) {
     if (!opt.quiet)
         std::cerr << "ferro-sim: " << sim.size() << " particles, spacing " << sim.spacing() * 1e3 << " mm, "
                   << (scene.solver.kind == SolverParams::Kind::DFSPH ? "DFSPH" : "WCSPH") << ", "
-                  << sim.boundaryPositions().size() << " boundary particles; "
+                  << sim.boundaryPositions().size() << " boundary particles"
+                  << magnetSummary(sim) << "; "
                   << (resumed ? "resuming after frame " + std::to_string(frame) : std::string("starting"))
                   << ", frames to " << lastFrame << "\n";
 
@@ -151,6 +178,7 @@ void runShot(const SimScene& scene, const RunOptions& opt) {
         ++frame;
         const auto frameStart = Clock::now();
         const size_t stepsBefore = sim.stepCount();
+        sim.resetMagneticsCounters();
         sim.advanceTo(frame / fps);
         writeParticleFile(particleFramePath(opt.outDir, frame), frameTable(sim, frame, opt));
         if (!opt.quiet) {
@@ -159,11 +187,21 @@ void runShot(const SimScene& scene, const RunOptions& opt) {
             const size_t steps = sim.stepCount() - stepsBefore;
             const double eta = now / (frame - firstFrame) * (lastFrame - frame);
             const StepStats& st = sim.lastStep();
+            std::string mag;
+            if (const FluidMagnetics* fm = sim.magnetics(); fm && fm->magnetic()) {
+                // How often the magnetization was re-solved: the field changes far more
+                // slowly than the step, so most steps reuse the induced field.
+                char buf[160];
+                std::snprintf(buf, sizeof buf, "  M solves %zu/%zu (%s, %d it, drift %.2g%%)", fm->stats().solves,
+                              fm->stats().steps, fm->stats().solver.c_str(), fm->stats().iterations,
+                              100 * fm->stats().cacheError);
+                mag = buf;
+            }
             std::fprintf(stderr,
                          "frame %4d/%d  t %.4f s  %5zu steps  %6.1f steps/s  dt %.2e s  iter p %d d %d  "
-                         "rho err %.3f%%  ETA %s\n",
+                         "rho err %.3f%%%s  ETA %s\n",
                          frame, lastFrame, sim.time(), steps, steps / std::max(frameSec, 1e-9), st.dt,
-                         st.pressureIterations, st.divergenceIterations, 100 * st.densityError,
+                         st.pressureIterations, st.divergenceIterations, 100 * st.densityError, mag.c_str(),
                          formatSeconds(eta).c_str());
         }
     }

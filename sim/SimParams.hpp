@@ -96,6 +96,13 @@ struct MagnetizationParams {
     double openingAngle = 0.5;     ///< Barnes-Hut opening angle theta (cell size / distance)
     int resolveEvery = 0;          ///< re-solve every K steps; 0 = when the field may have changed by > tolerance
     int maxIterations = 50;        ///< self-consistency iterations per solve (direct, tree)
+    /// Kelvin force from the gradient of the particles' own field too (SPH difference
+    /// gradient), not only of the magnets' field. Off by default: at a free surface that
+    /// gradient is the magnetic normal traction mu0 M_n^2 / 2, which a gauge-pressure SPH
+    /// fluid (no atmosphere, no tension) cannot hold, so surface particles lift off; the
+    /// instability it drives is what ferro-spikes synthesizes. The particles' field always
+    /// enters M (demagnetization), whichever way this is set.
+    bool inducedForce = false;
     bool enabled() const { return susceptibility > 0; }
 };
 

@@ -70,7 +70,7 @@ TEST_CASE("ferro-sim writes readable frames with the documented header", "[cli]"
     REQUIRE(r.err.empty());
     for (int f = 0; f <= 2; ++f) {
         const ParticleTable t = readParticleFile(frame(dir, f));
-        REQUIRE(t.names == std::vector<std::string>{"x", "y", "z", "vx", "vy", "vz", "density", "pressure"});
+        REQUIRE(t.names == std::vector<std::string>{"x", "y", "z", "vx", "vy", "vz", "density", "pressure", "hx", "hy", "hz", "mx", "my", "mz"});
         REQUIRE(t.rows() == 20 * 4 * 40);
         REQUIRE(std::stoi(t.comment("frame")) == f);
         REQUIRE(t.commentNumber("time", -1) == Approx(f / 100.0));

@@ -1,0 +1,229 @@
+#include "sim/FluidMagnetics.hpp"
+
+#include "sim/MagnetizationSolver.hpp"
+
+#include <tbb/blocked_range.h>
+#include <tbb/parallel_for.h>
+#include <tbb/parallel_reduce.h>
+
+#include <algorithm>
+#include <cmath>
+
+namespace ferro {
+
+namespace {
+
+constexpr double kMu0 = 4e-7 * 3.14159265358979323846; // vacuum permeability [T m/A]
+
+template <class F>
+void forEach(size_t n, F&& f) {
+    tbb::parallel_for(tbb::blocked_range<size_t>(0, n, 512), [&](const tbb::blocked_range<size_t>& r) {
+        for (size_t i = r.begin(); i != r.end(); ++i) f(i);
+    });
+}
+
+/// Sum of f(i) in a fixed order of fixed blocks (independent of the thread count).
+template <class F>
+double orderedSum(size_t n, F&& f) {
+    return tbb::parallel_deterministic_reduce(
+        tbb::blocked_range<size_t>(0, n, 2048), 0.0,
+        [&](const tbb::blocked_range<size_t>& r, double acc) {
+            for (size_t i = r.begin(); i != r.end(); ++i) acc += f(i);
+            return acc;
+        },
+        [](double a, double b) { return a + b; });
+}
+
+template <class T>
+void reorder(std::vector<T>& data, const std::vector<uint32_t>& order) {
+    if (data.size() != order.size()) return;
+    std::vector<T> tmp(data.size());
+    forEach(order.size(), [&](size_t k) { tmp[k] = data[order[k]]; });
+    data.swap(tmp);
+}
+
+const char* solverName(MagnetizationParams::Solver s) {
+    switch (s) {
+    case MagnetizationParams::Solver::External: return "external";
+    case MagnetizationParams::Solver::Direct: return "direct";
+    case MagnetizationParams::Solver::Tree: return "tree";
+    case MagnetizationParams::Solver::Auto: return "auto";
+    }
+    return "?";
+}
+
+} // namespace
+
+FluidMagnetics::FluidMagnetics(const SimScene& scene, double particleVolume, double spacing)
+    : tracks_(scene.magnets), law_(scene.magnetization), volume_(particleVolume), spacing_(spacing),
+      rho0_(scene.fluid.restDensity), gravity_(scene.solver.gravity.norm()) {
+    if (active() && magnetic()) solver_ = std::make_unique<MagnetizationSolver>(law_);
+}
+
+FluidMagnetics::~FluidMagnetics() = default;
+
+std::vector<Magnet> FluidMagnetics::magnetsAt(double t) const {
+    std::vector<Magnet> out;
+    out.reserve(tracks_.size());
+    for (const MagnetTrack& track : tracks_) out.push_back(track.at(t));
+    return out;
+}
+
+std::vector<Magnet> FluidMagnetics::softenedMagnetsAt(double t) const {
+    std::vector<Magnet> out = magnetsAt(t);
+    // SPH cannot resolve a field that varies over less than a particle spacing, and a
+    // 1/r^3 field with its 1/r^4 gradient near a pole would otherwise blow a particle that
+    // touches it out of the simulation: soften every source over at least one spacing.
+    for (Magnet& m : out) m.softening = std::max(m.softening, spacing_);
+    return out;
+}
+
+bool FluidMagnetics::solveIsStale() const {
+    if (!solved_ || HextSolved_.size() != Hext_.size()) return true;
+    if (law_.resolveEvery > 0) return stepsSinceSolve_ >= size_t(law_.resolveEvery);
+    // Between solves the induced field rides along with the particles. Its error grows with
+    // the fluid's deformation and the magnets' motion; each solve measures the error the
+    // cache had reached (see solve()), which sets how many steps the next cache may live.
+    if (stepsSinceSolve_ >= interval_) return true;
+    // A magnet that moves or changes faster than it did while the interval was measured
+    // (a keyframe jump, a fast fade): the induced field scales with the applied field, so
+    // its relative change times the induced share bounds the cache's new error.
+    const size_t n = Hext_.size();
+    const double extChange2 = orderedSum(n, [&](size_t i) { return double((Hext_[i] - HextSolved_[i]).squaredNorm()); });
+    const double ext2 = orderedSum(n, [&](size_t i) { return double(HextSolved_[i].squaredNorm()); });
+    const double relExt = ext2 > 0 ? std::sqrt(extChange2 / ext2) : (extChange2 > 0 ? 1.0 : 0.0);
+    return inducedShare_ * relExt > 0.5 * law_.tolerance;
+}
+
+void FluidMagnetics::applyLaw() {
+    const double chi0 = law_.susceptibility, Ms = law_.saturation;
+    forEach(H_.size(), [&](size_t i) {
+        const double h = H_[i].cast<double>().norm();
+        M_[i] = h > 0 ? Vec3((H_[i].cast<double>() * (langevinMagnetization(h, chi0, Ms) / h)).cast<Real>())
+                      : Vec3::Zero();
+    });
+}
+
+void FluidMagnetics::solve(const std::vector<Vec3>& x, bool forced) {
+    const size_t n = x.size();
+    // A forced solve (frame start) measures nothing: a resumed run, which has no cache to
+    // measure, then continues with exactly the interval the file recorded.
+    const bool measure = !forced && solved_ && HextSolved_.size() == n && law_.resolveEvery == 0;
+    std::vector<Vec3> predicted;
+    if (measure) {
+        // What the cache would have said now: applied field plus the carried induced field.
+        predicted.resize(n);
+        forEach(n, [&](size_t i) { predicted[i] = Hext_[i] + Hind_[i]; });
+    }
+    std::vector<Real> volume(n, Real(volume_));
+    const MagnetizationSolver::Stats st = solver_->solve(x, volume, magnets_, H_, M_);
+    forEach(n, [&](size_t i) { Hind_[i] = H_[i] - Hext_[i]; });
+    const double ind2 = orderedSum(n, [&](size_t i) { return double(Hind_[i].squaredNorm()); });
+    const double tot2 = orderedSum(n, [&](size_t i) { return double(H_[i].squaredNorm()); });
+    inducedShare_ = tot2 > 0 ? std::sqrt(ind2 / tot2) : 0.0;
+    if (measure && tot2 > 0) {
+        // What the cache's drift would have done to the motion: the error of the Kelvin
+        // acceleration, mu0 J_ext (chi dH) / rho0 with the secant susceptibility chi = M / H,
+        // relative to the accelerations that drive this fluid (gravity, the Kelvin force).
+        // A weak field may drift by many percent without changing anything that moves; a
+        // strong one is re-solved as often as its force needs. The error is assumed to grow
+        // linearly with the steps since the last solve; the next cache lives until it would
+        // reach half the tolerance, and the interval at most doubles per solve, so one
+        // lucky measurement cannot stretch it.
+        const double accErr2 = orderedSum(n, [&](size_t i) {
+            const double h = H_[i].cast<double>().norm();
+            const double chi = h > 0 ? M_[i].cast<double>().norm() / h : 0.0;
+            const Vec3d dM = chi * (H_[i] - predicted[i]).cast<double>();
+            return (fieldGradient(magnets_, x[i].cast<double>()) * dM).squaredNorm();
+        });
+        const double kelvin2 = kelvin_.size() == n ? orderedSum(n, [&](size_t i) { return double(kelvin_[i].squaredNorm()); }) : 0.0;
+        const double aRef = std::max(gravity_, std::sqrt(kelvin2 / double(n)));
+        const double err = aRef > 0 ? kMu0 / rho0_ * std::sqrt(accErr2 / double(n)) / aRef : 0.0;
+        const double rate = err / double(std::max<size_t>(stepsSinceSolve_, 1));
+        const double target = rate > 0 ? 0.5 * law_.tolerance / rate : 1e9;
+        interval_ = size_t(std::clamp(std::floor(target), 1.0, double(std::min<size_t>(2 * interval_, kMaxInterval))));
+        stats_.cacheError = err;
+    }
+    HextSolved_ = Hext_;
+    stepsSinceSolve_ = 1; // steps that use this solve, this one included
+    solved_ = true;
+    ++stats_.solves;
+    stats_.solver = solverName(st.solver);
+    stats_.iterations = st.iterations;
+    stats_.estimatedError = st.fieldError;
+}
+
+void FluidMagnetics::update(double t, const std::vector<Vec3>& x, const NeighborLists& nbr, bool forceSolve) {
+    if (!active()) return;
+    const size_t n = x.size();
+    magnets_ = softenedMagnetsAt(t);
+    Hext_.resize(n);
+    H_.resize(n, Vec3::Zero());
+    M_.resize(n, Vec3::Zero());
+    Hind_.resize(n, Vec3::Zero());
+    forEach(n, [&](size_t i) { Hext_[i] = magnetField(magnets_, x[i].cast<double>()).cast<Real>(); });
+    ++stats_.steps;
+    if (!magnetic()) {
+        H_ = Hext_;
+        std::fill(M_.begin(), M_.end(), Vec3::Zero());
+        kelvin_.clear();
+        maxAcceleration_ = 0;
+        return;
+    }
+    if (forceSolve || solveIsStale()) {
+        solve(x, forceSolve);
+    } else {
+        // Between solves: the cached induced field, the current applied field, the law.
+        forEach(n, [&](size_t i) { H_[i] = Hext_[i] + Hind_[i]; });
+        applyLaw();
+        ++stepsSinceSolve_;
+    }
+    computeKelvin(x, nbr);
+}
+
+void FluidMagnetics::computeKelvin(const std::vector<Vec3>& x, const NeighborLists& nbr) {
+    const size_t n = x.size();
+    kelvin_.resize(n);
+    const Real scale = Real(kMu0 / rho0_);
+    const Real V = Real(volume_);
+    const bool pairs = law_.inducedForce && nbr.offset.size() == n + 1;
+    forEach(n, [&](size_t i) {
+        // grad H = analytic Jacobian of the magnets (+ SPH difference gradient of the
+        // induced field with magnetization.induced_force).
+        Eigen::Matrix3f J = fieldGradient(magnets_, x[i].cast<double>()).cast<Real>();
+        const Vec3 hi = Hind_[i];
+        if (pairs)
+            for (uint32_t k = nbr.offset[i]; k < nbr.offset[i + 1]; ++k)
+                J += (V * (Hind_[nbr.index[k]] - hi)) * nbr.gradW[k].transpose();
+        kelvin_[i] = scale * (J * M_[i]);
+    });
+    maxAcceleration_ = std::sqrt(double(tbb::parallel_reduce(
+        tbb::blocked_range<size_t>(0, n, 4096), Real(0),
+        [&](const tbb::blocked_range<size_t>& r, Real m) {
+            for (size_t i = r.begin(); i != r.end(); ++i) m = std::max(m, kelvin_[i].squaredNorm());
+            return m;
+        },
+        [](Real a, Real b) { return std::max(a, b); })));
+}
+
+void FluidMagnetics::addKelvinAcceleration(std::vector<Vec3>& a) const {
+    if (kelvin_.size() != a.size()) return;
+    forEach(a.size(), [&](size_t i) { a[i] += kelvin_[i]; });
+}
+
+void FluidMagnetics::permute(const std::vector<uint32_t>& order) {
+    reorder(Hext_, order);
+    reorder(Hind_, order);
+    reorder(H_, order);
+    reorder(M_, order);
+    reorder(kelvin_, order);
+    reorder(HextSolved_, order);
+}
+
+void FluidMagnetics::setState(const std::vector<Vec3>& H, const std::vector<Vec3>& M) {
+    H_ = H;
+    M_ = M;
+    solved_ = false;
+}
+
+} // namespace ferro
