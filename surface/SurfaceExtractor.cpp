@@ -4,8 +4,10 @@
 #include "surface/DensityKernels.hpp"
 
 #include <openvdb/openvdb.h>
+#include <openvdb/tools/FastSweeping.h>
 #include <openvdb/tools/Filter.h>
-#include <openvdb/tools/LevelSetRebuild.h>
+#include <openvdb/tools/Morphology.h>
+#include <openvdb/tools/SignedFloodFill.h>
 #include <openvdb/tools/MeshToVolume.h>
 #include <openvdb/tools/ParticlesToLevelSet.h>
 #include <openvdb/tools/ValueTransformer.h>
@@ -354,6 +356,12 @@ TriangleMesh extractSurface(const std::vector<Vec3>& positions, const SurfacePar
             iso = 0;
             st.rasterSeconds = seconds(t0);
             t0 = tbb::tick_count::now();
+            if (std::abs(cal.offset) > 0.05 * voxel) {
+                // Inside a union of spheres ParticlesToLevelSet's values are no distances to
+                // the union's surface: re-distance the band (fast sweeping) before moving in.
+                grid = openvdb::tools::sdfToSdf(*grid, 0.0f, 1);
+                iso = cal.offset;
+            }
         } else {
             const std::vector<DensityKernel> kernels = buildKernels(positions, params, spacing);
             st.kernelSeconds = seconds(t0);
@@ -365,23 +373,40 @@ TriangleMesh extractSurface(const std::vector<Vec3>& positions, const SurfacePar
                 openvdb::tools::Filter<FloatGrid> filter(*grid);
                 filter.gaussian(1, params.smoothing);
             }
-            // Negated, the density follows the level-set convention (inside below the iso
-            // value) that volumeToMesh and levelSetRebuild expect.
-            openvdb::tools::foreach(grid->beginValueOn(), [](const FloatGrid::ValueOnIter& it) { it.setValue(-*it); });
+            iso = cal.isoLevel;
+            if (std::abs(cal.offset) > 0.05 * voxel) {
+                // Moving the surface along its normals must not fold it where it is concave:
+                // offset a distance field, not the vertices. Fast sweeping turns the density
+                // into distances on its active voxels, first grown out past the offset.
+                const int grow = int(std::ceil(std::max(0.0, cal.offset) / voxel)) + 1;
+                openvdb::tools::dilateActiveValues(grid->tree(), grow, openvdb::tools::NN_FACE_EDGE_VERTEX,
+                                                   openvdb::tools::IGNORE_TILES);
+                // Only a band around the surface needs distances: voxels deeper inside than
+                // the band are switched off, and filled in as inside afterwards.
+                const int band = grow + 2;
+                openvdb::BoolGrid::Ptr deep = openvdb::BoolGrid::create(false);
+                {
+                    auto acc = deep->getAccessor();
+                    const float level = float(iso);
+                    for (auto it = grid->cbeginValueOn(); it; ++it)
+                        if (*it > level) acc.setValueOn(it.getCoord());
+                }
+                openvdb::tools::erodeActiveValues(deep->tree(), band, openvdb::tools::NN_FACE_EDGE_VERTEX,
+                                                  openvdb::tools::IGNORE_TILES);
+                grid->tree().topologyDifference(deep->tree());
+                grid = openvdb::tools::fogToSdf(*grid, float(iso), 1);
+                openvdb::tools::signedFloodFill(grid->tree());
+                iso = cal.offset;
+            } else {
+                // Negated, the density follows the level-set convention (inside below the
+                // iso value), as the distance fields do.
+                openvdb::tools::foreach(grid->beginValueOn(), [](const FloatGrid::ValueOnIter& it) { it.setValue(-*it); });
+                iso = -iso;
+            }
             grid->setGridClass(openvdb::GRID_LEVEL_SET);
-            iso = -cal.isoLevel;
         }
         st.leaves = grid->tree().leafCount();
         st.activeVoxels = grid->activeVoxelCount();
-        if (std::abs(cal.offset) > 0.05 * voxel) {
-            // Moving the surface along its normals must not fold it where it is concave (or
-            // convex, moving in): offset a true distance field, not the vertices. (Inside a
-            // union of spheres ParticlesToLevelSet's values are no distances either.)
-            const float outside = float(std::max(0.0, cal.offset) / voxel) + 2;
-            const float inside = float(std::max(0.0, -cal.offset) / voxel) + 2;
-            grid = openvdb::tools::levelSetRebuild(*grid, float(iso), outside, inside);
-            iso = cal.offset;
-        }
         st.isoLevel = iso;
         openvdb::tools::volumeToMesh(*grid, points, tris, quads, iso, params.adaptivity);
         mesh = toTriangleMesh(points, tris, quads, /*flip=*/true);
