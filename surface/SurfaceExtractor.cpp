@@ -386,10 +386,23 @@ TriangleMesh extractSurface(const std::vector<Vec3>& positions, const SurfacePar
                 const int band = grow + 2;
                 openvdb::BoolGrid::Ptr deep = openvdb::BoolGrid::create(false);
                 {
-                    auto acc = deep->getAccessor();
+                    // The inside voxels, leaf by leaf in parallel.
+                    std::vector<const LeafT*> in;
+                    grid->tree().getNodes(in);
+                    using MaskLeaf = openvdb::BoolTree::LeafNodeType;
+                    std::vector<MaskLeaf*> out(in.size(), nullptr);
                     const float level = float(iso);
-                    for (auto it = grid->cbeginValueOn(); it; ++it)
-                        if (*it > level) acc.setValueOn(it.getCoord());
+                    tbb::parallel_for(tbb::blocked_range<size_t>(0, in.size(), 16), [&](const tbb::blocked_range<size_t>& r) {
+                        for (size_t l = r.begin(); l != r.end(); ++l) {
+                            auto* leaf = new MaskLeaf(in[l]->origin(), false);
+                            for (auto it = in[l]->cbeginValueOn(); it; ++it)
+                                if (*it > level) leaf->setValueOn(it.pos());
+                            if (leaf->isEmpty()) delete leaf;
+                            else out[l] = leaf;
+                        }
+                    });
+                    for (MaskLeaf* leaf : out)
+                        if (leaf) deep->tree().addLeaf(leaf);
                 }
                 openvdb::tools::erodeActiveValues(deep->tree(), band, openvdb::tools::NN_FACE_EDGE_VERTEX,
                                                   openvdb::tools::IGNORE_TILES);
