@@ -55,7 +55,7 @@ int main(int argc, char** argv) {
         ->check(CLI::IsMember({"anisotropic", "isotropic", "openvdb"}));
     app.add_option("--voxel-size", voxelSize, "voxel edge [m] (default: half the particle spacing)")
         ->check(CLI::PositiveNumber);
-    app.add_option("--kernel-radius", kernelRadius, "kernel support radius in particle spacings (default 1.5)")
+    app.add_option("--kernel-radius", kernelRadius, "kernel support radius in particle spacings (default 1.5; the Yu-Turk neighbourhood scales with it)")
         ->check(CLI::PositiveNumber);
     app.add_option("--adaptivity", adaptivity, "mesh adaptivity 0..1 (default 0: uniform triangles)")
         ->check(CLI::Range(0.0, 1.0));
