@@ -51,7 +51,7 @@ int main(int argc, char** argv) {
     app.add_option("--frames", frames, "frame range A:B (inclusive): INPUT and --out are patterns")->type_name("A:B");
     app.add_option("--scene", scenePath, "scene file: parameters from its [surface] section");
     app.add_option("--set", overrides, "override a scene key: --set surface.voxel_size=5e-4")->type_name("KEY=VALUE");
-    app.add_option("--method", method, "anisotropic (Yu-Turk, default), isotropic, or openvdb (fastest, roughest)")
+    app.add_option("--method", method, "anisotropic (Yu-Turk, default), isotropic (fastest, bumpier), or openvdb (ParticlesToLevelSet spheres, roughest)")
         ->check(CLI::IsMember({"anisotropic", "isotropic", "openvdb"}));
     app.add_option("--voxel-size", voxelSize, "voxel edge [m] (default: half the particle spacing)")
         ->check(CLI::PositiveNumber);
