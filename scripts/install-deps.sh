@@ -1,6 +1,7 @@
 #!/usr/bin/env bash
 # Installs Ferro's Debian 12 build and run dependencies that are missing.
-# Idempotent: installs nothing when everything is present. As root it runs apt-get;
+# Idempotent: installs nothing when everything is present. Usage: install-deps.sh [--with-video]
+# As root it runs apt-get;
 # otherwise it prints the exact apt-get line to run and exits 1.
 set -euo pipefail
 
@@ -10,6 +11,12 @@ PACKAGES=(
   libcgal-dev libassimp-dev libtomlplusplus-dev libcli11-dev catch2
   povray parallel
 )
+
+# --with-video: also ffmpeg, which the demo uses to assemble the rendered frames into a
+# video and a GIF (the tests do not need it, so CI does not install it).
+if [[ "${1:-}" == "--with-video" ]]; then
+  PACKAGES+=(ffmpeg)
+fi
 
 missing=()
 for p in "${PACKAGES[@]}"; do

@@ -86,13 +86,15 @@ bool FluidMagnetics::solveIsStale() const {
     // cache had reached (see solve()), which sets how many steps the next cache may live.
     if (stepsSinceSolve_ >= interval_) return true;
     // A magnet that moves or changes faster than it did while the interval was measured
-    // (a keyframe jump, a fast fade): the induced field scales with the applied field, so
-    // its relative change times the induced share bounds the cache's new error.
+    // (a keyframe jump, a fast fade). The cache follows the applied field's overall
+    // strength (inducedScale_); what that misses is the change of its pattern, which
+    // changes M, and so the Kelvin force, by about the induced share of it.
     const size_t n = Hext_.size();
-    const double extChange2 = orderedSum(n, [&](size_t i) { return double((Hext_[i] - HextSolved_[i]).squaredNorm()); });
-    const double ext2 = orderedSum(n, [&](size_t i) { return double(HextSolved_[i].squaredNorm()); });
-    const double relExt = ext2 > 0 ? std::sqrt(extChange2 / ext2) : (extChange2 > 0 ? 1.0 : 0.0);
-    return inducedShare_ * relExt > 0.5 * law_.tolerance;
+    const Real scale = Real(inducedScale_);
+    const double change2 = orderedSum(n, [&](size_t i) { return double((Hext_[i] - scale * HextSolved_[i]).squaredNorm()); });
+    const double now2 = orderedSum(n, [&](size_t i) { return double(Hext_[i].squaredNorm()); });
+    const double relChange = now2 > 0 ? std::sqrt(change2 / now2) : 0.0;
+    return inducedShare_ * kelvinShare_ * relChange > 0.5 * law_.tolerance;
 }
 
 void FluidMagnetics::applyLaw() {
@@ -113,7 +115,8 @@ void FluidMagnetics::solve(const std::vector<Vec3>& x, bool forced) {
     if (measure) {
         // What the cache would have said now: applied field plus the carried induced field.
         predicted.resize(n);
-        forEach(n, [&](size_t i) { predicted[i] = Hext_[i] + Hind_[i]; });
+        const Real scale = Real(inducedScale_);
+        forEach(n, [&](size_t i) { predicted[i] = Hext_[i] + scale * Hind_[i]; });
     }
     std::vector<Real> volume(n, Real(volume_));
     const MagnetizationSolver::Stats st = solver_->solve(x, volume, magnets_, H_, M_);
@@ -145,6 +148,8 @@ void FluidMagnetics::solve(const std::vector<Vec3>& x, bool forced) {
         stats_.cacheError = err;
     }
     HextSolved_ = Hext_;
+    extSolved2_ = orderedSum(n, [&](size_t i) { return double(Hext_[i].squaredNorm()); });
+    inducedScale_ = 1;
     stepsSinceSolve_ = 1; // steps that use this solve, this one included
     solved_ = true;
     ++stats_.solves;
@@ -170,15 +175,31 @@ void FluidMagnetics::update(double t, const std::vector<Vec3>& x, const Neighbor
         maxAcceleration_ = 0;
         return;
     }
-    if (forceSolve || solveIsStale()) {
+    if (!(forceSolve || !solved_)) {
+        const double now2 = orderedSum(n, [&](size_t i) { return double(Hext_[i].squaredNorm()); });
+        inducedScale_ = extSolved2_ > 0 ? std::sqrt(now2 / extSolved2_) : 1.0;
+    }
+    const bool solving = forceSolve || solveIsStale();
+    if (solving) {
         solve(x, forceSolve);
     } else {
         // Between solves: the cached induced field, the current applied field, the law.
-        forEach(n, [&](size_t i) { H_[i] = Hext_[i] + Hind_[i]; });
+        // The induced field is proportional to M, which follows the applied field: the
+        // cache is scaled with the applied field's RMS strength (inducedScale_, exact for
+        // a fading magnet in the linear regime); the drift measurement catches the rest.
+        const Real scale = Real(inducedScale_);
+        forEach(n, [&](size_t i) { H_[i] = Hext_[i] + scale * Hind_[i]; });
         applyLaw();
         ++stepsSinceSolve_;
     }
     computeKelvin(x, nbr);
+    if (solving) {
+        // How much the Kelvin force matters beside gravity (see solveIsStale()).
+        const double kelvin2 = orderedSum(n, [&](size_t i) { return double(kelvin_[i].squaredNorm()); });
+        const double rms = std::sqrt(kelvin2 / double(std::max<size_t>(n, 1)));
+        const double aRef = std::max(gravity_, rms);
+        kelvinShare_ = aRef > 0 ? rms / aRef : 1.0;
+    }
 }
 
 void FluidMagnetics::computeKelvin(const std::vector<Vec3>& x, const NeighborLists& nbr) {
@@ -194,7 +215,7 @@ void FluidMagnetics::computeKelvin(const std::vector<Vec3>& x, const NeighborLis
         const Vec3 hi = Hind_[i];
         if (pairs)
             for (uint32_t k = nbr.offset[i]; k < nbr.offset[i + 1]; ++k)
-                J += (V * (Hind_[nbr.index[k]] - hi)) * nbr.gradW[k].transpose();
+                J += (Real(inducedScale_) * V * (Hind_[nbr.index[k]] - hi)) * nbr.gradW[k].transpose();
         kelvin_[i] = scale * (J * M_[i]);
     });
     maxAcceleration_ = std::sqrt(double(tbb::parallel_reduce(

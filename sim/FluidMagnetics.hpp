@@ -114,6 +114,9 @@ private:
     static constexpr size_t kMaxInterval = 200;
     size_t interval_ = 1;                    // steps a solve may serve (measured, see solve())
     double inducedShare_ = 0;                // rms |H_ind| / rms |H| at the last solve
+    double kelvinShare_ = 1;                 // rms Kelvin acceleration / (its max with gravity)
+    double extSolved2_ = 0;                  // sum |H_ext|^2 at the last solve
+    double inducedScale_ = 1;                // rms |H_ext| now / at the last solve
     size_t stepsSinceSolve_ = 0;
     bool solved_ = false;
     MagneticsStats stats_;
