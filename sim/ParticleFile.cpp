@@ -462,4 +462,25 @@ std::string framePath(const std::string& pattern, int frame) {
     return out;
 }
 
+FrameRange parseFrameRange(const std::string& text) {
+    auto bad = [&](const std::string& why) {
+        return std::invalid_argument("'" + text + "': " + why);
+    };
+    // One number of at most 7 digits (leading zeros allowed), surrounded by optional spaces.
+    auto number = [&](const std::string& part) {
+        const std::string t = trim(part);
+        if (t.empty() || !std::all_of(t.begin(), t.end(), [](char c) { return c >= '0' && c <= '9'; }))
+            throw bad(t.size() > 0 && t[0] == '-' ? "frames cannot be negative" : "expected FIRST:LAST with non-negative integers");
+        const size_t lead = std::min(t.find_first_not_of('0'), t.size() - 1);
+        if (t.size() - lead > 7) throw bad("frame numbers above " + std::to_string(kMaxFrame) + " are not supported");
+        return std::stoi(t.substr(lead));
+    };
+    const size_t colon = text.find(':');
+    FrameRange r;
+    r.first = number(text.substr(0, colon));
+    r.last = colon == std::string::npos ? r.first : number(text.substr(colon + 1));
+    if (r.last < r.first) throw bad("LAST must not be before FIRST");
+    return r;
+}
+
 } // namespace ferro

@@ -9,6 +9,7 @@
 // renamed over the target only once complete.
 #include "sim/Types.hpp"
 
+#include <cstdint>
 #include <map>
 #include <stdexcept>
 #include <string>
@@ -47,5 +48,22 @@ ParticleTable readParticleFile(const std::string& path);
 
 /// `pattern` with a `{:04}`-style or printf `%04d` placeholder expanded for `frame`.
 std::string framePath(const std::string& pattern, int frame);
+
+/// An inclusive frame range, 0 <= first <= last <= kMaxFrame.
+struct FrameRange {
+    int first = 0;
+    int last = 0;
+    /// Number of frames; int64 so that callers never overflow when they multiply it.
+    int64_t count() const { return int64_t(last) - int64_t(first) + 1; }
+};
+
+/// Largest frame number a range may name: seven digits, far beyond any shot, and small enough
+/// that frame arithmetic (last + 1, counts, file names) never overflows an int.
+constexpr int kMaxFrame = 9999999;
+
+/// Parses `--frames` text: "A:B" (inclusive) or "A" (one frame), optional spaces around the
+/// numbers. Throws std::invalid_argument with a one-line reason (naming the text) for
+/// anything that is not two non-negative integers with A <= B <= kMaxFrame.
+FrameRange parseFrameRange(const std::string& text);
 
 } // namespace ferro

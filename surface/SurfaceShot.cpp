@@ -7,30 +7,33 @@
 #include <tbb/parallel_for.h>
 #include <tbb/tick_count.h>
 
+#include <cerrno>
 #include <cmath>
 #include <cstdio>
+#include <cstring>
+#include <fstream>
 #include <iomanip>
 #include <mutex>
 #include <sstream>
-
-#include <sys/stat.h>
 
 namespace ferro {
 
 namespace {
 
-bool fileExists(const std::string& path) {
-    struct stat st;
-    return ::stat(path.c_str(), &st) == 0;
+/// Empty if `path` opens for reading, else why not ("No such file or directory", ...).
+std::string openProblem(const std::string& path) {
+    std::ifstream probe(path, std::ios::binary);
+    return probe ? std::string() : std::string(std::strerror(errno));
 }
 
 } // namespace
 
 SurfaceStats meshParticleFile(const std::string& inPath, const std::string& outPath, const SurfaceParams& params,
                               const std::string& vdbPath) {
-    // A missing file is an I/O problem (wrong path, frame not simulated yet); a file that
-    // is there but unreadable as particles is bad input.
-    if (!fileExists(inPath)) throw SurfaceRunError(kExitIoError, inPath + ": no such file");
+    // A missing or unopenable file is an I/O problem (wrong path, frame not simulated yet,
+    // permissions); a file that opens but is unreadable as particles is bad input.
+    const std::string problem = openProblem(inPath);
+    if (!problem.empty()) throw SurfaceRunError(kExitIoError, inPath + ": cannot open: " + problem);
     ParticleTable table;
     std::vector<Vec3> x;
     double spacing = 0;
@@ -97,8 +100,9 @@ int runSurface(const SurfaceRun& run, const SurfaceParams& params, std::ostream&
     };
     if (!run.range) return one(run.input, run.output, run.vdb, "");
 
-    if (run.lastFrame < run.firstFrame) {
-        err << "ferro-surface: error: --frames " << run.firstFrame << ":" << run.lastFrame << ": empty range\n";
+    if (run.firstFrame < 0 || run.lastFrame < run.firstFrame || run.lastFrame > kMaxFrame) {
+        err << "ferro-surface: error: --frames " << run.firstFrame << ":" << run.lastFrame
+            << ": need 0 <= FIRST <= LAST <= " << kMaxFrame << "\n";
         return kExitBadInput;
     }
     // Distinct outputs per frame, or every frame would overwrite the same file.
@@ -109,11 +113,11 @@ int runSurface(const SurfaceRun& run, const SurfaceParams& params, std::ostream&
             return kExitBadInput;
         }
     }
-    const int count = run.lastFrame - run.firstFrame + 1;
+    const int64_t count = int64_t(run.lastFrame) - int64_t(run.firstFrame) + 1;
     std::vector<int> codes(size_t(count), kExitOk);
     // Frames in flight at once; each also runs its own steps in parallel.
-    tbb::parallel_for(0, count, [&](int k) {
-        const int f = run.firstFrame + k;
+    tbb::parallel_for(int64_t(0), count, [&](int64_t k) {
+        const int f = int(run.firstFrame + k);
         codes[size_t(k)] = one(framePath(run.input, f), framePath(run.output, f),
                                run.vdb.empty() ? std::string() : framePath(run.vdb, f),
                                "frame " + std::to_string(f) + " -> ");

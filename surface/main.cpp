@@ -1,8 +1,10 @@
 // ferro-surface: meshes particle files into fluid surfaces (Yu-Turk anisotropic kernels).
 // Parses arguments and calls the ferro_surface library; nothing else lives here.
+#include "surface/ErrorText.hpp"
 #include "surface/SurfaceParams.hpp"
 #include "surface/SurfaceShot.hpp"
 
+#include "sim/ParticleFile.hpp"
 #include "sim/SceneFile.hpp"
 #include "sim/ShotRunner.hpp"
 
@@ -11,29 +13,6 @@
 
 #include <iostream>
 #include <memory>
-
-namespace {
-
-/// "A:B" (inclusive) or "A" -> frames; false if malformed.
-bool parseFrames(const std::string& text, int& first, int& last) {
-    const size_t colon = text.find(':');
-    try {
-        size_t used = 0;
-        first = std::stoi(text.substr(0, colon), &used);
-        if (used != (colon == std::string::npos ? text.size() : colon)) return false;
-        if (colon == std::string::npos) {
-            last = first;
-            return true;
-        }
-        const std::string tail = text.substr(colon + 1);
-        last = std::stoi(tail, &used);
-        return used == tail.size() && first >= 0 && last >= first;
-    } catch (const std::exception&) {
-        return false;
-    }
-}
-
-} // namespace
 
 int main(int argc, char** argv) {
     using namespace ferro;
@@ -74,8 +53,12 @@ int main(int argc, char** argv) {
         return kExitBadInput;
     }
     if (!frames.empty()) {
-        if (!parseFrames(frames, run.firstFrame, run.lastFrame)) {
-            std::cerr << "ferro-surface: error: --frames " << frames << ": expected A:B with 0 <= A <= B\n";
+        try {
+            const FrameRange range = parseFrameRange(frames);
+            run.firstFrame = range.first;
+            run.lastFrame = range.last;
+        } catch (const std::invalid_argument& e) {
+            std::cerr << "ferro-surface: error: --frames " << e.what() << "\n";
             return kExitBadInput;
         }
         run.range = true;
@@ -114,7 +97,8 @@ int main(int argc, char** argv) {
     try {
         return runSurface(run, params, std::cerr, std::cerr);
     } catch (const std::exception& e) {
-        std::cerr << "ferro-surface: error: " << e.what() << "\n";
+        // Internal failures (OpenVDB, out of memory, ...): their messages may span lines.
+        std::cerr << "ferro-surface: error: " << oneLine(e.what()) << "\n";
         return kExitFailure;
     }
 }

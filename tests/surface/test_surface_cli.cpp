@@ -192,6 +192,14 @@ TEST_CASE("ferro-surface: bad input is a one-line error with exit 2, missing fil
     CHECK(fs::file_size(s / "keep.ply") == before);
 
     CHECK(run("'" + (s / "p.ply") + "' --out '" + (s / "m.ply") + "' --frames 5:2", s, &err) == 2);
+    // Ranges whose count or last + 1 would overflow an int: one line, exit 2, nothing started.
+    for (const char* frames : {"0:2147483647", "0:99999999999", "-1:3", "0:10000000"}) {
+        INFO(frames);
+        CHECK(run("'" + (s / "r_{:04}.ply") + "' --frames " + frames + " --out '" + (s / "rm_{:04}.ply") + "' -q", s,
+                  &err) == 2);
+        CHECK(err.rfind("ferro-surface: error: --frames ", 0) == 0);
+        CHECK(std::count(err.begin(), err.end(), '\n') == 1);
+    }
     CHECK(run("'" + (s / "p.ply") + "' --frames 0:1 --out '" + (s / "fixed.ply") + "'", s, &err) == 2);
     CHECK(err.find("placeholder") != std::string::npos);
     CHECK(run("'" + (s / "p.ply") + "' --out '" + (s / "m.xyzformat") + "'", s, &err) == 4);
