@@ -199,6 +199,25 @@ bool readPlyHeader(std::istream& in, PlyHeader& h) {
     return false;
 }
 
+/// Every element item with properties takes at least one byte (binary) or two characters
+/// (ascii), so counts beyond the bytes after the header are a corrupt or truncated file. Checked
+/// for every PLY before anything is allocated, by our reader or by assimp's.
+void checkPlyCounts(const std::string& path, const PlyHeader& h, std::istream& in) {
+    in.seekg(0, std::ios::end);
+    const auto end = in.tellg();
+    if (end < 0 || !in) fail(path, "cannot determine the file size");
+    if (static_cast<uint64_t>(end) < h.dataOffset) fail(path, "truncated (the header ends without a line break)");
+    const uint64_t available = static_cast<uint64_t>(end) - h.dataOffset;
+    uint64_t items = 0;
+    for (const auto& e : h.elements) {
+        if (e.properties.empty()) continue;
+        if (e.count > available - std::min(items, available))
+            fail(path, "truncated (the header declares " + std::to_string(e.count) + " " + e.name + " items in " +
+                           std::to_string(available) + " bytes)");
+        items += e.count;
+    }
+}
+
 /// Fast path for the files we write ourselves (and any binary little-endian PLY with float
 /// vertex properties and a uchar/uint face list): one read, no assimp scene.
 /// False when the file has another layout; throws when it has ours but is broken.
@@ -229,8 +248,11 @@ bool readOwnPly(const std::string& path, const PlyHeader& h, std::istream& in, T
 
     in.seekg(0, std::ios::end);
     const auto end = in.tellg();
-    in.seekg(static_cast<std::streamoff>(h.dataOffset));
     if (end < 0 || !in) fail(path, "cannot determine the file size");
+    // `end_header` without its line break counts one byte past the end of the file.
+    if (static_cast<uint64_t>(end) < h.dataOffset) fail(path, "truncated (the header ends without a line break)");
+    in.seekg(static_cast<std::streamoff>(h.dataOffset));
+    if (!in) fail(path, "cannot seek to the data");
     const uint64_t available = static_cast<uint64_t>(end) - h.dataOffset;
     const size_t cols = ve.properties.size();
     if (ve.count > available / (cols * sizeof(float))) fail(path, "truncated (expected " + std::to_string(ve.count) + " vertices)");
@@ -391,8 +413,9 @@ TriangleMesh readMesh(const std::string& path) {
     PlyHeader header;
     const bool isPly = readPlyHeader(in, header);
     if (isPly) {
-        TriangleMesh mesh;
         in.clear();
+        checkPlyCounts(path, header, in);
+        TriangleMesh mesh;
         if (readOwnPly(path, header, in, mesh)) {
             mesh.comments = std::move(header.comments);
             return mesh;

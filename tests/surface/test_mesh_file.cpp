@@ -221,3 +221,33 @@ TEST_CASE("mesh file errors are one-line MeshFileErrors", "[mesh]") {
     CHECK_THROWS_AS(readMesh((dir / "full.ply").string()), MeshFileError);
     fs::remove_all(dir);
 }
+
+TEST_CASE("a PLY header that ends the file, with huge counts, is a MeshFileError, not an allocation",
+          "[mesh]") {
+    const fs::path dir = scratchDir();
+    const std::string head = "ply\nformat binary_little_endian 1.0\nelement vertex 4000000000\nproperty float x\n"
+                             "property float y\nproperty float z\nelement face 4000000000\n"
+                             "property list uchar uint vertex_indices\n";
+    auto expectOneLineError = [&](const std::string& name, const std::string& text) {
+        {
+            std::ofstream((dir / name).string(), std::ios::binary) << text;
+        }
+        INFO(name);
+        try {
+            readMesh((dir / name).string());
+            FAIL("no error");
+        } catch (const MeshFileError& e) {
+            const std::string what = e.what();
+            CHECK(what.find('\n') == std::string::npos);
+            CHECK(what.find("truncated") != std::string::npos);
+        }
+    };
+    // `end_header` without its line break: the header "ends" one byte past the file.
+    expectOneLineError("no_newline.ply", head + "end_header");
+    expectOneLineError("no_data.ply", head + "end_header\n");
+    expectOneLineError("little_data.ply", head + "end_header\n" + std::string(100, '\0'));
+    // Other layouts go to assimp, but only after the same check.
+    expectOneLineError("ascii.ply", "ply\nformat ascii 1.0\nelement vertex 4000000000\nproperty double x\n"
+                                    "property double y\nproperty double z\nend_header\n0 0 0\n");
+    fs::remove_all(dir);
+}
