@@ -8,10 +8,13 @@
 #include <tbb/parallel_for.h>
 
 #include <atomic>
+#include <cerrno>
 #include <chrono>
 #include <cmath>
 #include <cstdio>
+#include <cstring>
 #include <exception>
+#include <fstream>
 #include <memory>
 #include <iostream>
 #include <mutex>
@@ -63,16 +66,24 @@ std::string formatDouble(double v)
 
 } // namespace
 
+void requireSpikeInput(const std::string& path)
+{
+    std::ifstream probe(path, std::ios::binary);
+    if (!probe) throw SpikeIoError(path + ": cannot open: " + std::strerror(errno));
+}
+
 SpikeInput loadSpikeInput(const SpikeScene& scene, const std::string& surfacePath, const std::string& particlePath,
                           int frameHint)
 {
     SpikeInput in;
+    requireSpikeInput(surfacePath);
+    if (!particlePath.empty()) requireSpikeInput(particlePath);
     try {
         in.surface = readMesh(surfacePath);
     } catch (const MeshFileError& e) {
         throw SpikeInputError(e.what());
     }
-    if (in.surface.empty()) throw SpikeInputError(surfacePath + ": mesh has no triangles");
+    // An empty surface (a frame without fluid) is valid: addSpikes returns it unchanged.
     for (const Vec3& v : in.surface.vertices)
         if (!v.allFinite()) throw SpikeInputError(surfacePath + ": mesh has a non-finite vertex");
     in.fluid = scene.fluid;
@@ -114,6 +125,9 @@ SpikeInput loadSpikeInput(const SpikeScene& scene, const std::string& surfacePat
     if (haveParticles && particles.rows() > 0) {
         try {
             const std::vector<Vec3> x = particles.vec3("x", "y", "z");
+            for (size_t i = 0; i < x.size(); ++i)
+                if (!x[i].allFinite())
+                    throw SpikeInputError(particlePath + ": particle " + std::to_string(i) + " has a non-finite position");
             in.particles.positions.reserve(x.size());
             for (const Vec3& p : x) in.particles.positions.push_back(p.cast<double>());
             in.particles.spacing = particles.commentNumber("spacing", in.fluid.particleSpacing);
@@ -140,7 +154,8 @@ SpikeInput loadSpikeInput(const SpikeScene& scene, const std::string& surfacePat
                 // Older files: the fluid's law in the magnets' field at the particle.
                 for (size_t i = 0; i < x.size(); ++i)
                     in.particles.magnetization[i] =
-                        fluidMagnetization(magnetField(in.magnets, in.particles.positions[i]).norm(), in.fluid.law);
+                        langevinMagnetization(magnetField(in.magnets, in.particles.positions[i]).norm(),
+                                              in.fluid.law.susceptibility, in.fluid.law.saturation);
             }
         } catch (const ParticleFileError& e) {
             throw SpikeInputError(particlePath + ": " + e.what());
@@ -175,6 +190,11 @@ SpikeResult spikeFrame(const SpikeScene& scene, const std::string& surfacePath, 
     set("spike_tips", std::to_string(res.tips.size()));
     set("spike_spacing", formatDouble(res.patterns.empty() ? 0.0 : res.patterns.front().spacing));
     set("critical_magnetization", formatDouble(res.critical.magnetization));
+    // Never write a broken mesh: renderers would show garbage or silently drop it.
+    for (size_t i = 0; i < out.vertices.size(); ++i)
+        if (!out.vertices[i].allFinite())
+            throw std::runtime_error(surfacePath + ": spiky mesh vertex " + std::to_string(i) +
+                                     " is not finite (please report this input)");
     writeMesh(outPath, out);
     return res;
 }
@@ -182,16 +202,22 @@ SpikeResult spikeFrame(const SpikeScene& scene, const std::string& surfacePath, 
 void spikeFrames(const SpikeScene& scene, const std::string& surfacePattern, const std::string& particlePattern,
                  const std::string& outPattern, int first, int last, bool quiet)
 {
-    if (last < first) throw SpikeInputError("--frames: last frame before first");
+    if (first < 0 || last < first || last > kMaxFrame)
+        throw SpikeInputError("--frames " + std::to_string(first) + ":" + std::to_string(last) +
+                              ": need 0 <= FIRST <= LAST <= " + std::to_string(kMaxFrame));
     if (first != last && framePath(outPattern, first) == framePath(outPattern, first + 1))
         throw SpikeInputError("--out: a frame range needs a {:04} or %04d placeholder in the output pattern");
     if (first != last && framePath(surfacePattern, first) == framePath(surfacePattern, first + 1))
         throw SpikeInputError("a frame range needs a {:04} or %04d placeholder in the surface pattern");
+    if (first != last && !particlePattern.empty() &&
+        framePath(particlePattern, first) == framePath(particlePattern, first + 1))
+        throw SpikeInputError("--particles: a frame range needs a {:04} or %04d placeholder in the particle pattern");
     std::mutex mutex;
     std::exception_ptr failure;
     int failedFrame = 0;
     std::atomic<bool> stop{false};
-    tbb::parallel_for(first, last + 1, 1, [&](int frame) {
+    tbb::parallel_for(int64_t(first), int64_t(last) + 1, int64_t(1), [&](int64_t frame64) {
+        const int frame = int(frame64);
         if (stop) return;
         try {
             const auto start = std::chrono::steady_clock::now();

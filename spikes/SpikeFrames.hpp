@@ -18,6 +18,16 @@ public:
     using std::runtime_error::runtime_error;
 };
 
+/// An input file (surface mesh or particle file) that is missing or cannot be opened;
+/// ferro-spikes exits with code 4. A file that opens but is unusable is a SpikeInputError.
+class SpikeIoError : public std::runtime_error {
+public:
+    using std::runtime_error::runtime_error;
+};
+
+/// Throws SpikeIoError ("<path>: cannot open: <reason>") unless `path` opens for reading.
+void requireSpikeInput(const std::string& path);
+
 /// What a run takes from the scene file, parsed and validated once.
 struct SpikeScene {
     SpikeParams params;                ///< [spikes]
@@ -33,13 +43,15 @@ SpikeScene parseSpikeScene(const SceneDocument& doc);
 /// Magnets, in order of preference: the particle file's header, the mesh's header, the scene's
 /// tracks at the frame's time (header `time`, else `frame` / fps, else `frameHint` / fps).
 /// The magnetic law likewise: headers (susceptibility, saturation), else [magnetization].
-/// Throws SpikeInputError.
+/// An empty surface is valid (a frame without fluid). Throws SpikeIoError when a file cannot
+/// be opened, SpikeInputError when one is unusable (malformed, non-finite positions, ...).
 SpikeInput loadSpikeInput(const SpikeScene& scene, const std::string& surfacePath,
                           const std::string& particlePath, int frameHint = -1);
 
 /// One frame: load, addSpikes, write `outPath` atomically (PLY with normals and the input's
-/// comments plus spike_tips, spike_spacing, critical_magnetization). Throws SpikeInputError on
-/// bad input, MeshFileError when the output cannot be written.
+/// comments plus spike_tips, spike_spacing, critical_magnetization). Throws SpikeIoError or
+/// SpikeInputError as loadSpikeInput, MeshFileError when the output cannot be written, and
+/// std::runtime_error (never writing) if the result had a non-finite vertex.
 SpikeResult spikeFrame(const SpikeScene& scene, const std::string& surfacePath, const std::string& particlePath,
                        const std::string& outPath, int frameHint = -1);
 

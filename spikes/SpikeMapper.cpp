@@ -1,6 +1,7 @@
 // The spike synthesis of SpikeMapper.hpp.
 #include "spikes/SpikeMapper.hpp"
 
+#include "sim/MagnetizationSolver.hpp"
 #include "spikes/SurfaceGeometry.hpp"
 
 #include <Eigen/Dense>
@@ -186,7 +187,7 @@ public:
             });
             if (weight > 0) return sum / weight;
         }
-        return fluidMagnetization(H.norm(), in_.fluid.law);
+        return langevinMagnetization(H.norm(), in_.fluid.law.susceptibility, in_.fluid.law.saturation);
     }
 
     /// 0 at M_c, 1 from (1 + fade) M_c on, smooth: scales each spike's height (taken at its tip,
@@ -417,14 +418,33 @@ SpikeResult addSpikes(const SpikeInput& in, const SpikeParams& P)
                 if (hasMinus) return Vec3d(tip.position - minus);
                 return Vec3d(l * (flat - flat.dot(tip.normal) * tip.normal).normalized());
             };
-            const Vec3d b1 = basis(1, 0, e1);
-            const Vec3d b2 = basis(0, 1, 0.5 * e1 + std::sqrt(0.75) * e1perp);
-            Eigen::Matrix3d A;
-            A.col(0) = b1;
-            A.col(1) = b2;
-            A.col(2) = b1.cross(b2).normalized() * l;
-            const Eigen::Matrix3d inverse = A.inverse();
-            tip.toLattice = inverse.topRows<2>();
+            const Vec3d f1 = e1, f2 = 0.5 * e1 + std::sqrt(0.75) * e1perp;
+            auto frame = [&](const Vec3d& b1, const Vec3d& b2) {
+                Eigen::Matrix3d A;
+                A.col(0) = b1;
+                A.col(1) = b2;
+                const Vec3d c = b1.cross(b2);
+                A.col(2) = c.norm() > 0 ? Vec3d(c.normalized() * l) : Vec3d::Zero();
+                return A;
+            };
+            // Neighbours that (nearly) line up with the tip give b1 x b2 ~ 0 and no inverse:
+            // that tip takes the flat basis projected on its tangent plane, and where even
+            // that degenerates (a normal in the pattern's plane), the pattern's own frame.
+            const double minDet = 1e-9 * l * l * l;
+            Eigen::Matrix3d A = frame(basis(1, 0, f1), basis(0, 1, f2));
+            if (!(std::abs(A.determinant()) >= minDet) || !A.allFinite()) {
+                auto project = [&](const Vec3d& f) {
+                    const Vec3d t = f - f.dot(tip.normal) * tip.normal;
+                    return t.norm() > 1e-12 ? Vec3d(l * t.normalized()) : Vec3d::Zero();
+                };
+                A = frame(project(f1), project(f2));
+            }
+            if (!(std::abs(A.determinant()) >= minDet) || !A.allFinite()) {
+                A.col(0) = l * f1;
+                A.col(1) = l * f2;
+                A.col(2) = l * n0;
+            }
+            tip.toLattice = A.inverse().topRows<2>();
         }
         for (Tip& tip : pat.tips) {
             const Vec3d H = fields.field(tip.position, tip.normal);

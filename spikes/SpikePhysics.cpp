@@ -1,5 +1,7 @@
 #include "spikes/SpikePhysics.hpp"
 
+#include "sim/MagnetizationSolver.hpp"
+
 #include <cmath>
 #include <limits>
 
@@ -8,22 +10,12 @@ namespace ferro {
 namespace {
 constexpr double kPi = 3.14159265358979323846;
 
-// Langevin function L(xi) = coth(xi) - 1/xi, by its series near 0 where the difference cancels.
-double langevin(double xi)
+/// |M| of `law` at field magnitude H (the simulator's Langevin law, one definition for all stages).
+double lawMagnetization(double H, const MagnetizationParams& law)
 {
-    if (std::abs(xi) < 1e-3)
-        return xi / 3.0 - xi * xi * xi / 45.0;
-    return 1.0 / std::tanh(xi) - 1.0 / xi;
+    return langevinMagnetization(std::abs(H), law.susceptibility, law.saturation);
 }
 } // namespace
-
-double fluidMagnetization(double H, const MagnetizationParams& law)
-{
-    H = std::abs(H);
-    if (law.saturation <= 0)
-        return law.susceptibility * H;
-    return law.saturation * langevin(3.0 * law.susceptibility * H / law.saturation);
-}
 
 CriticalMagnetization criticalMagnetization(double deltaRho, double gravity, double surfaceTension,
                                             const MagnetizationParams& law)
@@ -49,15 +41,14 @@ CriticalMagnetization criticalMagnetization(double deltaRho, double gravity, dou
         }
         // Invert the monotone law by bisection: M(H) = Mc.
         double lo = 0, hi = Mc / law.susceptibility;
-        while (fluidMagnetization(hi, law) < Mc) hi *= 2;
+        while (lawMagnetization(hi, law) < Mc) hi *= 2;
         for (int i = 0; i < 100; ++i) {
             const double mid = 0.5 * (lo + hi);
-            (fluidMagnetization(mid, law) < Mc ? lo : hi) = mid;
+            (lawMagnetization(mid, law) < Mc ? lo : hi) = mid;
         }
         const double H = 0.5 * (lo + hi);
-        const double dH = 1e-6 * H;
         const double chiChord = Mc / H;
-        const double chiTangent = (fluidMagnetization(H + dH, law) - fluidMagnetization(H - dH, law)) / (2 * dH);
+        const double chiTangent = langevinSlope(H, law.susceptibility, law.saturation);
         const double r0 = std::sqrt((1 + chiChord) * (1 + chiTangent));
         c.internalField = H;
         c.appliedField = H + Mc;

@@ -8,10 +8,8 @@ namespace ferro {
 
 constexpr double kMu0 = 4e-7 * 3.14159265358979323846; ///< vacuum permeability [T m/A]
 
-/// |M| [A/m] of the fluid in a field of magnitude H [A/m]: Langevin law
-/// M = Ms (coth xi - 1/xi), xi = 3 chi0 H / Ms (paper eq. 5 with saturation), or chi0 H when
-/// Ms = 0. Monotone, M(0) = 0, dM/dH(0) = chi0.
-double fluidMagnetization(double H, const MagnetizationParams& law);
+// The fluid's law M(H) is the simulator's: langevinMagnetization / langevinSlope in
+// sim/MagnetizationSolver.hpp (paper eq. 5 with Langevin saturation).
 
 /// The threshold of the normal-field (Rosensweig) instability of a flat layer.
 struct CriticalMagnetization {

@@ -4,6 +4,7 @@
 #include "sim/SceneFile.hpp"
 #include "sim/ShotRunner.hpp"
 #include "spikes/SpikeFrames.hpp"
+#include "surface/ErrorText.hpp"
 
 #include <CLI/CLI.hpp>
 #include <tbb/global_control.h>
@@ -41,22 +42,12 @@ int main(int argc, char** argv) {
     }
     int first = -1, last = -1;
     if (!frames.empty()) {
-        const size_t colon = frames.find(':');
         try {
-            size_t used = 0;
-            first = std::stoi(frames.substr(0, colon), &used);
-            if (used != (colon == std::string::npos ? frames.size() : colon)) throw std::invalid_argument("");
-            last = first;
-            if (colon != std::string::npos) {
-                last = std::stoi(frames.substr(colon + 1), &used);
-                if (used != frames.size() - colon - 1) throw std::invalid_argument("");
-            }
-        } catch (const std::exception&) {
-            std::cerr << "ferro-spikes: error: --frames: expected A:B with integers (got '" << frames << "')\n";
-            return kExitBadInput;
-        }
-        if (first < 0 || last < first) {
-            std::cerr << "ferro-spikes: error: --frames: need 0 <= A <= B (got '" << frames << "')\n";
+            const FrameRange range = parseFrameRange(frames);
+            first = range.first;
+            last = range.last;
+        } catch (const std::invalid_argument& e) {
+            std::cerr << "ferro-spikes: error: --frames " << e.what() << "\n";
             return kExitBadInput;
         }
     }
@@ -80,11 +71,15 @@ int main(int argc, char** argv) {
     } catch (const SpikeInputError& e) {
         std::cerr << "ferro-spikes: error: " << e.what() << "\n";
         return kExitBadInput;
+    } catch (const SpikeIoError& e) {
+        std::cerr << "ferro-spikes: error: " << e.what() << "\n";
+        return kExitIoError;
     } catch (const MeshFileError& e) {
         std::cerr << "ferro-spikes: error: " << e.what() << "\n";
         return kExitIoError;
     } catch (const std::exception& e) {
-        std::cerr << "ferro-spikes: error: " << e.what() << "\n";
+        // Internal failures (CGAL, out of memory, ...): their messages may span lines.
+        std::cerr << "ferro-spikes: error: " << oneLine(e.what()) << "\n";
         return kExitFailure;
     }
     return kExitOk;

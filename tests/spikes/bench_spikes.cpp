@@ -9,6 +9,7 @@
 #include "SpikeTestMeshes.hpp"
 
 #include "sim/MagnetState.hpp"
+#include "sim/MagnetizationSolver.hpp"
 #include "sim/ParticleFile.hpp"
 #include "sim/SceneFile.hpp"
 #include "spikes/SpikeFrames.hpp"
@@ -60,7 +61,7 @@ int main(int argc, char** argv)
             for (double z = h / 2; z < height(r, 0) - h / 4; z += h) {
                 const Vec3d p(x + jitter(rng), y + jitter(rng), z + jitter(rng));
                 const Vec3d H = magnetField(magnets, p);
-                const Vec3d M = H.normalized() * fluidMagnetization(H.norm(), scene.fluid.law);
+                const Vec3d M = H.normalized() * langevinMagnetization(H.norm(), scene.fluid.law.susceptibility, scene.fluid.law.saturation);
                 for (double v : {p.x(), p.y(), p.z(), 0.0, 0.0, 0.0, 1200.0, H.x(), H.y(), H.z(), M.x(), M.y(), M.z()})
                     particles.values.push_back(float(v));
             }

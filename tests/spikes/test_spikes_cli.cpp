@@ -2,11 +2,13 @@
 // bad input is one line on stderr and exit code 2.
 #include "SpikeTestMeshes.hpp"
 
+#include "sim/ParticleFile.hpp"
 #include "sim/SceneFile.hpp"
 #include "spikes/SpikeFrames.hpp"
 
 #include <catch2/catch.hpp>
 
+#include <cmath>
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
@@ -95,6 +97,30 @@ TEST_CASE("ferro-spikes: one frame and a frame range from files", "[spikes][cli]
     REQUIRE(f0.vertices == one.vertices);
 }
 
+TEST_CASE("ferro-spikes: an empty surface (a frame without fluid) gives an empty spiky mesh", "[spikes][cli]")
+{
+    const fs::path dir = scratch("empty");
+    const std::string scene = kSource + "/examples/rosensweig_uniform.toml";
+    TriangleMesh empty;
+    empty.comments = {{"frame", "4"}};
+    writeMesh((dir / "surface_0004.ply").string(), empty);
+    writeMesh((dir / "surface_0005.ply").string(), empty);
+    std::string err;
+    REQUIRE(run((dir / "surface_0004.ply").string() + " --scene " + scene + " --out " + (dir / "one.ply").string() +
+                    " --quiet",
+                err, dir) == 0);
+    CHECK(err.empty());
+    const TriangleMesh one = readMesh((dir / "one.ply").string());
+    CHECK(one.vertices.empty());
+    CHECK(one.triangles.empty());
+    CHECK(comment(one, "frame") == "4");
+    CHECK(comment(one, "spike_tips") == "0");
+    REQUIRE(run("'" + (dir / "surface_{:04}.ply").string() + "' --frames 4:5 --scene " + scene + " --out '" +
+                    (dir / "spiky_{:04}.ply").string() + "' --quiet",
+                err, dir) == 0);
+    CHECK(readMesh((dir / "spiky_0005.ply").string()).triangles.empty());
+}
+
 TEST_CASE("ferro-spikes: bad input is one line and exit code 2", "[spikes][cli]")
 {
     const fs::path dir = scratch("bad");
@@ -105,8 +131,18 @@ TEST_CASE("ferro-spikes: bad input is one line and exit code 2", "[spikes][cli]"
         REQUIRE(e.rfind("ferro-spikes: error: ", 0) == 0);
         REQUIRE(std::count(e.begin(), e.end(), '\n') == 1);
     };
+    // Missing input files are I/O errors (4), like ferro-surface's and ferro-pov's.
     REQUIRE(run((dir / "missing.ply").string() + " --scene " + scene + " --out " + (dir / "o.ply").string(), err,
-                dir) == 2);
+                dir) == 4);
+    oneLine(err);
+    REQUIRE(run((dir / "pool.ply").string() + " --particles " + (dir / "missing.ply").string() + " --scene " + scene +
+                    " --out " + (dir / "o.ply").string(),
+                err, dir) == 4);
+    oneLine(err);
+    // A missing scene file is bad input.
+    REQUIRE(run((dir / "pool.ply").string() + " --scene " + (dir / "missing.toml").string() + " --out " +
+                    (dir / "o.ply").string(),
+                err, dir) == 2);
     oneLine(err);
     REQUIRE(run((dir / "pool.ply").string() + " --scene " + scene + " --set spikes.bogus=1 --out " +
                     (dir / "o.ply").string(),
@@ -116,6 +152,33 @@ TEST_CASE("ferro-spikes: bad input is one line and exit code 2", "[spikes][cli]"
     REQUIRE(run((dir / "pool.ply").string() + " --scene " + scene + " --frames 3:1 --out " + (dir / "o.ply").string(),
                 err, dir) == 2);
     oneLine(err);
+    // Ranges whose last + 1 would overflow an int, and frames beyond seven digits.
+    for (const char* frames : {"0:2147483647", "0:99999999999", "2147483647:2147483647", "-1:2"}) {
+        INFO(frames);
+        REQUIRE(run("'" + (dir / "s_{:04}.ply").string() + "' --scene " + scene + " --frames " + frames + " --out '" +
+                        (dir / "o_{:04}.ply").string() + "'",
+                    err, dir) == 2);
+        oneLine(err);
+        REQUIRE(err.find("--frames") != std::string::npos);
+    }
+    // A range needs a frame placeholder in the particle pattern too.
+    REQUIRE(run("'" + (dir / "s_{:04}.ply").string() + "' --particles " + (dir / "p.ply").string() + " --scene " +
+                    scene + " --frames 0:1 --out '" + (dir / "o_{:04}.ply").string() + "'",
+                err, dir) == 2);
+    oneLine(err);
+    REQUIRE(err.find("particle pattern") != std::string::npos);
+    // Particles with a NaN position.
+    {
+        ParticleTable t;
+        t.names = {"x", "y", "z"};
+        t.values = {0, 0, 0.01f, std::nanf(""), 0, 0.01f};
+        writeParticleFile((dir / "nan.ply").string(), t);
+    }
+    REQUIRE(run((dir / "pool.ply").string() + " --particles " + (dir / "nan.ply").string() + " --scene " + scene +
+                    " --out " + (dir / "o.ply").string(),
+                err, dir) == 2);
+    oneLine(err);
+    REQUIRE(err.find("non-finite position") != std::string::npos);
     std::ofstream((dir / "garbage.ply").string()) << "ply\nformat nonsense\n";
     REQUIRE(run((dir / "garbage.ply").string() + " --scene " + scene + " --out " + (dir / "o.ply").string(), err,
                 dir) == 2);
