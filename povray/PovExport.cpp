@@ -6,8 +6,10 @@
 
 #include <algorithm>
 #include <charconv>
+#include <cerrno>
 #include <cmath>
 #include <cstdio>
+#include <cstring>
 #include <filesystem>
 #include <fstream>
 #include <limits>
@@ -97,11 +99,10 @@ std::vector<Vec3> vertexNormals(const TriangleMesh& mesh)
 {
     if (mesh.normals.size() == mesh.vertices.size())
         return mesh.normals;
-    TriangleMesh copy;
-    copy.vertices = mesh.vertices;
-    copy.triangles = mesh.triangles;
-    computeVertexNormals(copy);
-    return copy.normals;
+    std::vector<Vec3> normals;
+    for (const Vec3d& n : areaWeightedNormals(mesh))
+        normals.push_back(n.cast<Real>());
+    return normals;
 }
 
 } // namespace
@@ -123,6 +124,10 @@ std::string meshInclude(const TriangleMesh& mesh, int frame)
         for (uint32_t i : t)
             if (i >= nv)
                 throw MeshFileError("triangle refers to vertex " + std::to_string(i) + " of " + std::to_string(nv));
+    // POV-Ray has no literal for inf or NaN; writing them as anything would hide a broken mesh.
+    for (size_t i = 0; i < nv; ++i)
+        if (!mesh.vertices[i].allFinite())
+            throw MeshFileError("vertex " + std::to_string(i) + " is not finite");
     Vec3d lo = Vec3d::Constant(std::numeric_limits<double>::max()), hi = -lo;
     for (const Vec3& v : mesh.vertices) {
         const Vec3d p = toPovPoint(v.cast<double>());
@@ -495,7 +500,20 @@ void PovExporter::exportFrame(const TriangleMesh& mesh, int frame) const
 
 void PovExporter::exportFrameFile(const std::string& meshPath, int frame) const
 {
-    exportFrame(readMesh(meshPath), frame);
+    requireMeshInput(meshPath);
+    const TriangleMesh mesh = readMesh(meshPath); // its errors name the file already
+    try {
+        exportFrame(mesh, frame);
+    } catch (const MeshFileError& e) {
+        throw MeshFileError(meshPath + ": " + e.what());
+    }
+}
+
+void requireMeshInput(const std::string& path)
+{
+    std::ifstream probe(path, std::ios::binary);
+    if (!probe)
+        throw PovInputMissing(path + ": cannot open: " + std::strerror(errno));
 }
 
 } // namespace ferro

@@ -46,6 +46,16 @@ public:
     using std::runtime_error::runtime_error;
 };
 
+/// An input file (mesh) that is missing or cannot be opened (exit code 4 in ferro-pov); a file
+/// that opens but is not a usable mesh is a MeshFileError (exit code 2).
+class PovInputMissing : public std::runtime_error {
+public:
+    using std::runtime_error::runtime_error;
+};
+
+/// Throws PovInputMissing ("<path>: cannot open: <reason>") unless `path` opens for reading.
+void requireMeshInput(const std::string& path);
+
 /// POV-Ray units per metre: exported scenes are in millimetres.
 constexpr double kPovUnitsPerMetre = 1000.0;
 /// Decimals written for positions (in mm: 1e-3 mm = 1 micrometre) and unit normals.
@@ -59,7 +69,7 @@ Vec3d toPovDirection(const Vec3d& d);
 
 /// Appends `v` rounded to `decimals` digits after the point, with trailing zeros and a
 /// trailing point removed: 1.5, -0.002, 3, 0 (never "-0"). Non-finite values are written as 0
-/// (POV-Ray has no literal for them; the mesh stages never produce them).
+/// (POV-Ray has no literal for them); meshInclude rejects meshes with non-finite vertices first.
 void appendNumber(std::string& out, double v, int decimals);
 /// Appends "<a,b,c>" with appendNumber.
 void appendVector(std::string& out, const Vec3d& v, int decimals);
@@ -67,6 +77,7 @@ void appendVector(std::string& out, const Vec3d& v, int decimals);
 /// Text of mesh_NNNN.inc for `mesh` (Ferro coordinates). Vertex normals are written when the
 /// mesh has one per vertex, else computed from the triangles. An empty mesh gives a file that
 /// declares FerroMeshTriangles = 0 and no FerroMesh (POV-Ray rejects a mesh2 without faces).
+/// Throws MeshFileError for an out-of-range index or a non-finite vertex.
 std::string meshInclude(const TriangleMesh& mesh, int frame);
 
 /// The magnets at a frame: the ones in the mesh's header comments (`comment magnet_count`,
@@ -120,7 +131,8 @@ public:
     /// mesh_NNNN.inc and magnets_NNNN.inc of `frame` from an in-memory mesh. The frame's time
     /// is the mesh's `comment time` if present, else frame / fps.
     void exportFrame(const TriangleMesh& mesh, int frame) const;
-    /// Same, reading the mesh from a file (any format readMesh reads). Throws MeshFileError.
+    /// Same, reading the mesh from a file (any format readMesh reads). Throws PovInputMissing when
+    /// the file cannot be opened, MeshFileError when it is not a usable mesh.
     void exportFrameFile(const std::string& meshPath, int frame) const;
 
     const ShotDescription& shot() const { return shot_; }

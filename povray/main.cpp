@@ -4,6 +4,7 @@
 #include "sim/ParticleFile.hpp"
 #include "sim/SceneFile.hpp"
 #include "sim/ShotRunner.hpp"
+#include "surface/ErrorText.hpp"
 
 #include <CLI/CLI.hpp>
 #include <tbb/global_control.h>
@@ -11,21 +12,18 @@
 
 #include <iostream>
 #include <memory>
-#include <regex>
 
 namespace {
 
-// "A:B" -> {A, B} with 0 <= A <= B; throws CLI::ValidationError.
+// parseFrameRange's error as a CLI11 validation error of `option`.
 std::pair<int, int> parseRange(const std::string& text, const std::string& option)
 {
-    static const std::regex re(R"(\s*(\d+)\s*:\s*(\d+)\s*)");
-    std::smatch m;
-    if (!std::regex_match(text, m, re))
-        throw CLI::ValidationError(option, "expected FIRST:LAST (got '" + text + "')");
-    const int a = std::stoi(m[1]), b = std::stoi(m[2]);
-    if (b < a)
-        throw CLI::ValidationError(option, "LAST must be >= FIRST (got '" + text + "')");
-    return {a, b};
+    try {
+        const ferro::FrameRange r = ferro::parseFrameRange(text);
+        return {r.first, r.last};
+    } catch (const std::invalid_argument& e) {
+        throw CLI::ValidationError(option, e.what());
+    }
 }
 
 } // namespace
@@ -83,14 +81,15 @@ int main(int argc, char** argv)
         if (!input.empty() && frames.first >= 0) {
             // Read every file first, so a missing frame fails the run before anything is written.
             for (int f = frames.first; f <= frames.second; ++f)
-                if (!std::filesystem::exists(framePath(input, f)))
-                    throw MeshFileError(framePath(input, f) + ": no such file");
-            tbb::parallel_for(frames.first, frames.second + 1, [&](int f) {
+                requireMeshInput(framePath(input, f));
+            tbb::parallel_for(int64_t(frames.first), int64_t(frames.second) + 1, [&](int64_t f64) {
+                const int f = int(f64);
                 exporter.exportFrameFile(framePath(input, f), f);
                 if (!quiet)
                     std::cerr << "ferro-pov: frame " + std::to_string(f) + " -> " + exporter.meshIncludePath(f) + "\n";
             });
         } else if (!input.empty()) {
+            requireMeshInput(input);
             const TriangleMesh mesh = readMesh(input);
             int f = frame;
             if (f < 0) {
@@ -101,7 +100,11 @@ int main(int argc, char** argv)
                     throw MeshFileError(input + ": no `comment frame` in the file; give --frame N");
                 f = int(commented);
             }
-            exporter.exportFrame(mesh, f);
+            try {
+                exporter.exportFrame(mesh, f);
+            } catch (const MeshFileError& e) {
+                throw MeshFileError(input + ": " + e.what());
+            }
             if (!quiet)
                 std::cerr << "ferro-pov: frame " << f << " -> " << exporter.meshIncludePath(f) << "\n";
         }
@@ -113,11 +116,14 @@ int main(int argc, char** argv)
     } catch (const MeshFileError& e) {
         std::cerr << "ferro-pov: error: " << e.what() << "\n";
         return kExitBadInput;
+    } catch (const PovInputMissing& e) {
+        std::cerr << "ferro-pov: error: " << e.what() << "\n";
+        return kExitIoError;
     } catch (const PovExportError& e) {
         std::cerr << "ferro-pov: error: " << e.what() << "\n";
         return kExitIoError;
     } catch (const std::exception& e) {
-        std::cerr << "ferro-pov: error: " << e.what() << "\n";
+        std::cerr << "ferro-pov: error: " << oneLine(e.what()) << "\n";
         return kExitFailure;
     }
     return kExitOk;

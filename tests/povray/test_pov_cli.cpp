@@ -121,9 +121,34 @@ TEST_CASE("ferro-pov rejects bad input with one line and exit code 2", "[pov][cl
         CHECK(r.out.rfind("ferro-pov: error: ", 0) == 0);
         CHECK(std::count(r.out.begin(), r.out.end(), '\n') == 1);
     };
-    oneLineError(run(kPov + " '" + (dir / "missing.ply").string() + "'" + scene + " --frame 0"));
-    oneLineError(run(kPov + " '" + (dir / "m_{:04}.ply").string() + "'" + scene + " --frames 0:2"));
+    // Missing meshes are I/O errors (exit 4), like ferro-surface's and ferro-spikes' inputs.
+    auto missingError = [](const Result& r) {
+        INFO(r.out);
+        CHECK(r.code == 4);
+        CHECK(r.out.rfind("ferro-pov: error: ", 0) == 0);
+        CHECK(std::count(r.out.begin(), r.out.end(), '\n') == 1);
+    };
+    missingError(run(kPov + " '" + (dir / "missing.ply").string() + "'" + scene + " --frame 0"));
+    missingError(run(kPov + " '" + (dir / "m_{:04}.ply").string() + "'" + scene + " --frames 0:2"));
     oneLineError(run(kPov + " '" + (dir / "mesh.ply").string() + "'" + scene + " --frames 3:1"));
+    // Frame numbers that would overflow an int (std::stoi used to abort here).
+    for (const char* frames : {"0:99999999999", "0:2147483647", "-1:2", "1:2:3"}) {
+        INFO(frames);
+        oneLineError(run(kPov + " '" + (dir / "m_{:04}.ply").string() + "'" + scene + " --frames " + frames));
+        oneLineError(run(kPov + scene + " --shot-frames " + frames));
+    }
+    // A mesh with a non-finite vertex: POV-Ray has no literal for it, and 0 would hide the fault.
+    {
+        TriangleMesh nan;
+        nan.vertices = {Vec3(0, 0, 0), Vec3(std::nanf(""), 0, 0), Vec3(0, 0.01f, 0)};
+        nan.triangles = {{0, 1, 2}};
+        writeMesh((dir / "nan.ply").string(), nan);
+    }
+    {
+        const Result r = run(kPov + " '" + (dir / "nan.ply").string() + "'" + scene + " --frame 0");
+        oneLineError(r);
+        CHECK(r.out.find("not finite") != std::string::npos);
+    }
     oneLineError(run(kPov + " '" + (dir / "mesh.ply").string() + "'" + scene + " --set render.widht=3"));
     oneLineError(run(kPov + " '" + (dir / "mesh.ply").string() + "' --scene '" + (dir / "bad.toml").string() +
                      "' --out '" + (dir / "shot").string() + "'"));
