@@ -43,16 +43,20 @@ out="$(cd "$out" && pwd)"
 last="$(sed -n 's/^SHOT_LAST := //p' "$out/Makefile")"
 first=0
 if [[ -n "$frames" ]]; then
-  [[ "$frames" =~ ^[0-9]+:[0-9]+$ ]] || die "--frames needs FIRST:LAST (got '$frames')"
-  first="${frames%%:*}" last="${frames##*:}"
+  [[ "$frames" =~ ^[0-9]{1,7}:[0-9]{1,7}$ ]] || die "--frames needs FIRST:LAST up to 9999999 (got '$frames')"
+  # 10#: "08" is eight, not a bad octal number.
+  first="$((10#${frames%%:*}))" last="$((10#${frames##*:}))"
   (( first <= last )) || die "--frames $frames: FIRST must be <= LAST"
 fi
 
 make -C "$out" --no-print-directory prepare
 # --retries 2: a frame that fails on one machine is tried again (on any machine);
 # --halt soon,fail=1: after a frame failed for good, start no new frames and report.
+# -o: the shared targets that `prepare` just made are never remade by a frame job (a remote
+# make that saw them stale, e.g. after a scene edit, would re-simulate under every frame).
 seq "$first" "$last" | parallel "${logins[@]}" --retries 2 --halt soon,fail=1 --tagstring 'frame {}' \
-  make -C "$out" --no-print-directory frames FIRST={} LAST={}
+  make -C "$out" --no-print-directory -o particles/.complete -o shot/shot.pov -o shot/look.inc \
+  frames FIRST={} LAST={}
 if [[ $video == 1 && -z "$frames" ]] && command -v ffmpeg >/dev/null; then
   make -C "$out" --no-print-directory video
 fi

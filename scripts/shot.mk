@@ -68,9 +68,16 @@ frames: $(FRAMES:%=png/frame_%.png)
 prepare: particles/.complete shot/shot.pov shot/look.inc
 
 # ---- Simulation: one run writes every frame ---------------------------------------------------
+# Into particles.new/, swapped in only when the run succeeded: a failed or interrupted
+# re-simulation (after a [sim] edit) keeps the previous frames and everything made from them.
 particles/.complete: .scene/sim.toml
-	$(FERRO_BIN)/ferro-sim '$(SCENE)' --out particles --overwrite --quiet $(if $(MAX_FRAMES),--max-frames $(MAX_FRAMES))
-	touch $@
+	rm -rf particles.new
+	$(FERRO_BIN)/ferro-sim '$(SCENE)' --out particles.new --quiet $(if $(MAX_FRAMES),--max-frames $(MAX_FRAMES))
+	touch particles.new/.complete
+	rm -rf particles.old
+	if [ -d particles ]; then mv particles particles.old; fi
+	mv particles.new particles
+	rm -rf particles.old
 
 # A particle file is made by the simulation; after a new run it is touched so the later stages
 # see it as new. A frame the simulation never reached is an error, not an empty frame.

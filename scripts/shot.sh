@@ -35,8 +35,11 @@ while [[ $# -gt 0 ]]; do
 done
 [[ -n "$scene" && -n "$out" ]] || { usage >&2; exit 2; }
 [[ -f "$scene" ]] || die "$scene: no such scene file"
-[[ -z "$max_frames" || "$max_frames" =~ ^[0-9]+$ ]] || die "--max-frames needs a number (got '$max_frames')"
-[[ -z "$frames" || "$frames" =~ ^[0-9]+:[0-9]+$ ]] || die "--frames needs FIRST:LAST (got '$frames')"
+# At most 7 digits (frames up to 9,999,999, like the stages): bash arithmetic never overflows.
+[[ -z "$max_frames" || "$max_frames" =~ ^[0-9]{1,7}$ ]] || die "--max-frames needs a number up to 9999999 (got '$max_frames')"
+[[ -z "$frames" || "$frames" =~ ^[0-9]{1,7}:[0-9]{1,7}$ ]] || die "--frames needs FIRST:LAST up to 9999999 (got '$frames')"
+# 10#: "08" is eight, not a bad octal number.
+[[ -z "$max_frames" ]] || max_frames="$((10#$max_frames))"
 [[ "$jobs" =~ ^[1-9][0-9]*$ ]] || die "-j needs a positive number (got '$jobs')"
 
 bin="${FERRO_BIN:-$root/build/bin}"
@@ -58,7 +61,8 @@ last="$(sed -n 's/^Final_Frame=//p' "$probe/shot.ini")"
 if [[ -n "$max_frames" && "$max_frames" -lt "$last" ]]; then last="$max_frames"; fi
 first_render=0 last_render="$last"
 if [[ -n "$frames" ]]; then
-  first_render="${frames%%:*}" last_render="${frames##*:}"
+  # 10#: "08" is eight, not a bad octal number.
+  first_render="$((10#${frames%%:*}))" last_render="$((10#${frames##*:}))"
   (( first_render <= last_render )) || die "--frames $frames: FIRST must be <= LAST"
   (( last_render <= last )) || die "--frames $frames: the shot ends at frame $last"
 fi

@@ -9,7 +9,6 @@
 #include <chrono>
 #include <map>
 #include <regex>
-#include <thread>
 
 using namespace ferro;
 using namespace ferro::povtest;
@@ -77,11 +76,15 @@ std::map<std::string, int> perFrame(const std::string& text, const std::string& 
     return count;
 }
 
-// Marks a file as modified now (file times have nanosecond resolution here; a short pause
-// keeps the order unambiguous even on coarser file systems).
-void touchNow(const fs::path& p)
+// Makes `p` at least 2 s newer than every other file under `root`, with no pause: every other
+// file's time moves 2 s back (their order is kept), then `p` gets the time now. This holds on
+// file systems with coarse (1 s) times too, and leaves no file in the future: a future time
+// would make every file made from `p` in the next 2 s look stale to make.
+void touchNow(const fs::path& p, const fs::path& root)
 {
-    std::this_thread::sleep_for(std::chrono::milliseconds(20));
+    for (const auto& entry : fs::recursive_directory_iterator(root))
+        if (entry.is_regular_file() && !entry.is_symlink() && entry.path() != p)
+            fs::last_write_time(entry.path(), entry.last_write_time() - std::chrono::seconds(2));
     fs::last_write_time(p, fs::file_time_type::clock::now());
 }
 
@@ -116,10 +119,10 @@ TEST_CASE("shot.sh renders a tiny shot; make re-runs exactly the stale frames an
     CHECK(res.out.find("Nothing to be done") != std::string::npos);
 
     // One frame's particles change: only that frame is re-meshed, re-exported, re-rendered.
+    touchNow(out / "particles" / "particles_0002.ply", dir);
     std::map<int, fs::file_time_type> rendered;
     for (int f = 0; f <= 3; ++f)
         rendered[f] = fs::last_write_time(out / "png" / ("frame_000" + std::to_string(f) + ".png"));
-    touchNow(out / "particles" / "particles_0002.ply");
     res = run(make + "-n frames");
     INFO(res.out);
     CHECK(perFrame(res.out, "ferro-surface particles") == std::map<std::string, int>{{"0002", 1}});
@@ -138,7 +141,7 @@ TEST_CASE("shot.sh renders a tiny shot; make re-runs exactly the stale frames an
     std::string scene = slurp(dir / "tiny.toml");
     scene.replace(scene.find("width = 48"), 10, "width = 40");
     spit(dir / "tiny.toml", scene);
-    touchNow(dir / "tiny.toml");
+    touchNow(dir / "tiny.toml", dir);
     res = run(make + "-n frames");
     INFO(res.out);
     CHECK(perFrame(res.out, "povray render.ini").size() == 4);
@@ -149,29 +152,50 @@ TEST_CASE("shot.sh renders a tiny shot; make re-runs exactly the stale frames an
 
     // A comment-only edit of the scene changes no section: nothing to do.
     spit(dir / "tiny.toml", slurp(dir / "tiny.toml") + "\n# a note\n");
-    touchNow(dir / "tiny.toml");
+    touchNow(dir / "tiny.toml", dir);
     CHECK(run(make + "-q frames").code == 0);
 
     // The artists' look changes: every frame re-renders.
-    touchNow(out / "shot" / "look.inc");
+    touchNow(out / "shot" / "look.inc", dir);
     res = run(make + "-n frames");
     CHECK(perFrame(res.out, "povray render.ini").size() == 4);
     CHECK(perFrame(res.out, "ferro-surface particles").empty());
     REQUIRE(run(make + "-j2 frames").code == 0);
 
-    // The farm: frames 1..2 again on "this machine" through GNU parallel.
+    // The farm: frames 1..2 again on "this machine" through GNU parallel ("01": leading zeros
+    // are decimal, not octal).
     if (run("command -v parallel").code) {
         WARN("GNU parallel is not installed: farm.sh not tested");
-        return;
+    } else {
+        fs::remove(out / "png" / "frame_0001.png");
+        fs::remove(out / "png" / "frame_0002.png");
+        res = run("'" + kSource + "/scripts/farm.sh' '" + out.string() + "' --frames 01:02 --sshlogin : --no-video");
+        INFO(res.out);
+        REQUIRE(res.code == 0);
+        CHECK(fs::exists(out / "png" / "frame_0001.png"));
+        CHECK(fs::exists(out / "png" / "frame_0002.png"));
+        CHECK(run(make + "-q frames").code == 0);
     }
-    fs::remove(out / "png" / "frame_0001.png");
-    fs::remove(out / "png" / "frame_0002.png");
-    res = run("'" + kSource + "/scripts/farm.sh' '" + out.string() + "' --frames 1:2 --sshlogin : --no-video");
+
+    // A [fluid] edit whose simulation fails (here a stand-in ferro-sim that writes one broken
+    // frame and exits 3): the previous simulation's frames stay where they were.
+    const fs::path failing = dir / "failing-bin";
+    fs::create_directories(failing);
+    spit(failing / "ferro-sim",
+         "#!/usr/bin/env bash\n# stand-in for a ferro-sim run that fails after its first frame\n"
+         "out=''; while [[ $# -gt 0 ]]; do [[ $1 == --out ]] && out=$2; shift; done\n"
+         "mkdir -p \"$out\" && echo broken > \"$out/particles_0000.ply\"; exit 3\n");
+    fs::permissions(failing / "ferro-sim", fs::perms::owner_all);
+    const std::string frame0 = slurp(out / "particles" / "particles_0000.ply");
+    scene = slurp(dir / "tiny.toml");
+    scene.replace(scene.find("count = 300"), 11, "count = 290");
+    spit(dir / "tiny.toml", scene);
+    res = run(make + "prepare FERRO_BIN='" + failing.string() + "'");
     INFO(res.out);
-    REQUIRE(res.code == 0);
-    CHECK(fs::exists(out / "png" / "frame_0001.png"));
-    CHECK(fs::exists(out / "png" / "frame_0002.png"));
-    CHECK(run(make + "-q frames").code == 0);
+    CHECK(res.code != 0);
+    CHECK(slurp(out / "particles" / "particles_0000.ply") == frame0);
+    CHECK(fs::exists(out / "particles" / "particles_0003.ply"));
+    CHECK(fs::exists(out / "particles" / ".complete"));
 }
 
 TEST_CASE("shot.sh rejects bad arguments with one line and exit code 2", "[pov][pipeline]")
@@ -191,4 +215,11 @@ TEST_CASE("shot.sh rejects bad arguments with one line and exit code 2", "[pov][
     res = run(shot + "'" + (dir / "tiny.toml").string() + "' '" + (dir / "out").string() + "' --frames 0:99");
     CHECK(res.code == 2);
     CHECK(res.out.find("ends at frame 3") != std::string::npos);
+    // "08" is eight, not a bad octal number to bash.
+    res = run(shot + "'" + (dir / "tiny.toml").string() + "' '" + (dir / "out").string() + "' --frames 08:09");
+    INFO(res.out);
+    CHECK(res.code == 2);
+    CHECK(res.out.find("ends at frame 3") != std::string::npos);
+    res = run(shot + "'" + (dir / "tiny.toml").string() + "' '" + (dir / "out").string() + "' --frames 0:99999999999");
+    CHECK(res.code == 2);
 }
