@@ -179,17 +179,9 @@ SpikeResult spikeFrame(const SpikeScene& scene, const std::string& surfacePath, 
         writeMagnetComments(header, in.magnets, &in.fluid.law);
         out.comments = header.comments;
     }
-    auto set = [&](const std::string& key, const std::string& value) {
-        for (auto& kv : out.comments)
-            if (kv.first == key) {
-                kv.second = value;
-                return;
-            }
-        out.comments.emplace_back(key, value);
-    };
-    set("spike_tips", std::to_string(res.tips.size()));
-    set("spike_spacing", formatDouble(res.patterns.empty() ? 0.0 : res.patterns.front().spacing));
-    set("critical_magnetization", formatDouble(res.critical.magnetization));
+    setComment(out, "spike_tips", std::to_string(res.tips.size()));
+    setComment(out, "spike_spacing", formatDouble(res.patterns.empty() ? 0.0 : res.patterns.front().spacing));
+    setComment(out, "critical_magnetization", formatDouble(res.critical.magnetization));
     // Never write a broken mesh: renderers would show garbage or silently drop it.
     for (size_t i = 0; i < out.vertices.size(); ++i)
         if (!out.vertices[i].allFinite())

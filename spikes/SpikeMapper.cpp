@@ -121,21 +121,6 @@ Vec3d faceNormal(const TriangleMesh& mesh, uint32_t t)
     return len > 0 ? Vec3d(n / len) : Vec3d(0, 0, 1);
 }
 
-std::vector<Vec3d> vertexNormals(const TriangleMesh& mesh)
-{
-    std::vector<Vec3d> n(mesh.vertices.size(), Vec3d::Zero());
-    for (const auto& t : mesh.triangles) {
-        const Vec3d a = toD(mesh.vertices[t[0]]), b = toD(mesh.vertices[t[1]]), c = toD(mesh.vertices[t[2]]);
-        const Vec3d w = (b - a).cross(c - a); // area-weighted
-        for (uint32_t v : t) n[v] += w;
-    }
-    for (Vec3d& v : n) {
-        const double len = v.norm();
-        v = len > 0 ? Vec3d(v / len) : Vec3d(0, 0, 1);
-    }
-    return n;
-}
-
 std::vector<double> vertexAreas(const TriangleMesh& mesh)
 {
     std::vector<double> area(mesh.vertices.size(), 0.0);
@@ -259,7 +244,7 @@ SpikeResult addSpikes(const SpikeInput& in, const SpikeParams& P)
     const size_t nIn = input.vertices.size();
 
     // 1. Wetted walls and the supercritical part of the input surface.
-    const std::vector<Vec3d> inputNormals = vertexNormals(input);
+    const std::vector<Vec3d> inputNormals = areaWeightedNormals(input);
     std::vector<char> wettedIn(nIn, 0), activeIn(nIn, 0);
     std::vector<double> magnetizationIn(nIn, 0.0);
     tbb::parallel_for(size_t(0), nIn, [&](size_t v) {
@@ -494,7 +479,7 @@ SpikeResult addSpikes(const SpikeInput& in, const SpikeParams& P)
                 if (nearest >= 0) refined.vertices[size_t(nearest)] = tip.position.cast<float>();
             }
     }
-    const std::vector<Vec3d> normals = vertexNormals(refined);
+    const std::vector<Vec3d> normals = areaWeightedNormals(refined);
 
     // 5. Heights and directions on the refined surface.
     std::vector<char> wetted(n, 0);

@@ -59,18 +59,10 @@ SurfaceStats meshParticleFile(const std::string& inPath, const std::string& outP
         throw SurfaceRunError(kExitIoError, e.what());
     }
     mesh.comments = table.comments;
-    auto setComment = [&](const std::string& key, const std::string& value) {
-        for (auto& c : mesh.comments)
-            if (c.first == key) {
-                c.second = value;
-                return;
-            }
-        mesh.comments.emplace_back(key, value);
-    };
-    setComment("surface_method", methodName(params.method));
+    setComment(mesh, "surface_method", methodName(params.method));
     std::ostringstream sp;
     sp << std::setprecision(9) << stats.spacing;
-    setComment("spacing", sp.str());
+    setComment(mesh, "spacing", sp.str());
     try {
         writeMesh(outPath, mesh, params.format);
     } catch (const MeshFileError& e) {

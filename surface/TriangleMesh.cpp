@@ -442,7 +442,7 @@ double enclosedVolume(const TriangleMesh& mesh) {
     return sixTimes / 6.0;
 }
 
-void computeVertexNormals(TriangleMesh& mesh) {
+std::vector<Vec3d> areaWeightedNormals(const TriangleMesh& mesh) {
     std::vector<Vec3d> sum(mesh.vertices.size(), Vec3d::Zero());
     for (const auto& t : mesh.triangles) {
         const Vec3d a = mesh.vertices[t[0]].cast<double>();
@@ -451,13 +451,28 @@ void computeVertexNormals(TriangleMesh& mesh) {
         const Vec3d n = (b - a).cross(c - a); // length = twice the area: area weighting
         for (uint32_t i : t) sum[i] += n;
     }
-    mesh.normals.resize(mesh.vertices.size());
-    for (size_t i = 0; i < sum.size(); ++i) {
-        const double len = sum[i].norm();
+    for (Vec3d& n : sum) {
+        const double len = n.norm();
         // A vertex in no triangle (or only degenerate ones) has no direction; +z keeps the
         // normal unit length for renderers that expect one.
-        mesh.normals[i] = len > 0 ? Vec3((sum[i] / len).cast<Real>()) : Vec3(0, 0, 1);
+        n = len > 0 ? Vec3d(n / len) : Vec3d(0, 0, 1);
     }
+    return sum;
+}
+
+void computeVertexNormals(TriangleMesh& mesh) {
+    const std::vector<Vec3d> n = areaWeightedNormals(mesh);
+    mesh.normals.resize(n.size());
+    for (size_t i = 0; i < n.size(); ++i) mesh.normals[i] = n[i].cast<Real>();
+}
+
+void setComment(TriangleMesh& mesh, const std::string& key, const std::string& value) {
+    for (auto& c : mesh.comments)
+        if (c.first == key) {
+            c.second = value;
+            return;
+        }
+    mesh.comments.emplace_back(key, value);
 }
 
 } // namespace ferro

@@ -44,7 +44,13 @@ TriangleMesh readMesh(const std::string& path);
 
 /// Signed enclosed volume [m^3] (divergence theorem); positive for an outward-oriented closed mesh.
 double enclosedVolume(const TriangleMesh& mesh);
-/// Area-weighted vertex normals from the triangles (outward for counter-clockwise triangles).
+/// Area-weighted unit vertex normals from the triangles (outward for counter-clockwise
+/// triangles), in double precision; +z for a vertex in no triangle with area.
+std::vector<Vec3d> areaWeightedNormals(const TriangleMesh& mesh);
+/// Sets mesh.normals to areaWeightedNormals(mesh).
 void computeVertexNormals(TriangleMesh& mesh);
+
+/// Sets the first `comment key value` line of `mesh` to `value`, or appends one.
+void setComment(TriangleMesh& mesh, const std::string& key, const std::string& value);
 
 } // namespace ferro
