@@ -2,6 +2,8 @@
 // face selection, and the closed / self-intersection checks.
 #include "spikes/SurfaceGeometry.hpp"
 
+#include "surface/ErrorText.hpp"
+
 #include <CGAL/AABB_traits.h>
 #include <CGAL/AABB_tree.h>
 #include <CGAL/AABB_triangle_primitive.h>
@@ -13,6 +15,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <stdexcept>
 
 namespace ferro {
 
@@ -103,8 +106,13 @@ bool remeshSelectedTriangles(TriangleMesh& mesh, const std::vector<char>& select
     for (size_t t = 0; t < faces.size(); ++t)
         if (t < selected.size() && selected[t]) patch.push_back(faces[t]);
     if (patch.empty() || iterations <= 0 || !(targetEdge > 0)) return true;
-    PMP::isotropic_remeshing(patch, targetEdge, cg,
-                             CGAL::parameters::number_of_iterations(iterations).protect_constraints(false));
+    try {
+        PMP::isotropic_remeshing(patch, targetEdge, cg,
+                                 CGAL::parameters::number_of_iterations(iterations).protect_constraints(false));
+    } catch (const std::exception& e) {
+        // CGAL's precondition reports span several lines; ferro-spikes prints one.
+        throw std::runtime_error("CGAL isotropic remeshing: " + oneLine(e.what()));
+    }
     cg.collect_garbage();
 
     TriangleMesh out;

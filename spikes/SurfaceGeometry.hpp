@@ -37,7 +37,8 @@ private:
 /// the mesh is kept (the border of the selection stays conforming, so a closed mesh stays
 /// closed). New vertices lie on the input surface (tangential relaxation projects back).
 /// Normals are dropped (recompute them); comments are kept. Returns false and leaves `mesh`
-/// untouched if the mesh is not an oriented 2-manifold CGAL can load.
+/// untouched if the mesh is not an oriented 2-manifold CGAL can load. Throws std::runtime_error
+/// with a one-line "CGAL isotropic remeshing: ..." reason if CGAL fails on the selection.
 bool remeshSelectedTriangles(TriangleMesh& mesh, const std::vector<char>& selected, double targetEdge,
                              int iterations);
 

@@ -1,6 +1,7 @@
 // --frames parsing shared by ferro-surface, ferro-spikes and ferro-pov (sim/ParticleFile.hpp),
-// and the particle reader's answer to a header that ends the file.
+// the particle reader's answer to a header that ends the file, and one-line error text.
 #include "sim/ParticleFile.hpp"
+#include "surface/ErrorText.hpp"
 
 #include <catch2/catch.hpp>
 
@@ -60,4 +61,12 @@ TEST_CASE("the particle reader rejects a header that ends without its line break
         }
     }
     fs::remove_all(dir);
+}
+
+TEST_CASE("oneLine folds a multi-line library message into one line", "[frames]") {
+    CHECK(oneLine("plain") == "plain");
+    CHECK(oneLine("CGAL ERROR: precondition violation!\nExpr: x  \n  File: a.h\r\nLine: 3\n") ==
+          "CGAL ERROR: precondition violation!; Expr: x; File: a.h; Line: 3");
+    CHECK(oneLine("\n\nlate start") == "late start");
+    CHECK(oneLine("") == "");
 }
