@@ -117,6 +117,7 @@ private:
     double kelvinShare_ = 1;                 // rms Kelvin acceleration / (its max with gravity)
     double extSolved2_ = 0;                  // sum |H_ext|^2 at the last solve
     double inducedScale_ = 1;                // rms |H_ext| now / at the last solve
+    double lastFieldError_ = 0;              // the last solve's estimated relative field error
     size_t stepsSinceSolve_ = 0;
     bool solved_ = false;
     MagneticsStats stats_;

@@ -16,6 +16,8 @@ namespace ferro {
 
 using Mat3d = Eigen::Matrix3d;
 
+constexpr double kMu0 = 4e-7 * 3.14159265358979323846; ///< vacuum permeability [T m/A]
+
 /// One field source. A plain struct: which members matter depends on `kind`.
 struct Magnet {
     enum class Kind {

@@ -2,11 +2,11 @@
 // The physics behind the spikes: the fluid's magnetization law, the Cowley-Rosensweig
 // critical magnetization (paper eq. 16) and wavelength, and the hexagonal height field of
 // eq. 13. Pure functions, SI units.
+#include "sim/MagnetField.hpp"
 #include "sim/SimParams.hpp"
 
 namespace ferro {
 
-constexpr double kMu0 = 4e-7 * 3.14159265358979323846; ///< vacuum permeability [T m/A]
 
 // The fluid's law M(H) is the simulator's: langevinMagnetization / langevinSlope in
 // sim/MagnetizationSolver.hpp (paper eq. 5 with Langevin saturation).
