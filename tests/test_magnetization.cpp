@@ -442,7 +442,7 @@ TEST_CASE("Warm start cuts the work of the next solve", "[magnetization]") {
     }
 }
 
-TEST_CASE("Auto picks the cheapest accurate solver; nothing runs without magnets", "[magnetization]") {
+TEST_CASE("Auto picks the cheapest accurate solver, and nothing runs without magnets", "[magnetization]") {
     std::vector<Vec3> small, big;
     std::vector<Real> Vs, Vb;
     layer(1.24e-3, 0.01, 3, small, Vs);

@@ -40,7 +40,7 @@ void writeTetrahedron(const fs::path& path, int frame)
 
 } // namespace
 
-TEST_CASE("ferro-pov keeps an edited look.inc; --force-template replaces it", "[pov][cli]")
+TEST_CASE("ferro-pov keeps an edited look.inc, and --force-template replaces it", "[pov][cli]")
 {
     const fs::path dir = freshDir("template");
     spit(dir / "scene.toml", kScene);

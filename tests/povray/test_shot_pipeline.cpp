@@ -90,7 +90,7 @@ void touchNow(const fs::path& p, const fs::path& root)
 
 } // namespace
 
-TEST_CASE("shot.sh renders a tiny shot; make re-runs exactly the stale frames and stages", "[pov][pipeline]")
+TEST_CASE("shot.sh renders a tiny shot, and make re-runs exactly the stale frames and stages", "[pov][pipeline]")
 {
     if (!fs::exists(kBin + "ferro-sim")) {
         WARN("ferro-sim is not built: skipped");

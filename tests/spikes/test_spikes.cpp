@@ -240,7 +240,7 @@ TEST_CASE("flat pool in a vertical field: hexagonal tips at the analytic spacing
     requireHealthy(res);
 }
 
-TEST_CASE("spacing shrinks and spikes grow as the field grows; none below M_c", "[spikes][pool]")
+TEST_CASE("spacing shrinks and spikes grow as the field grows, and none below M_c", "[spikes][pool]")
 {
     const double R = 0.03;
     const TriangleMesh pool = makeFlatPool(R, kDepth, 20);

@@ -54,7 +54,7 @@ TEST_CASE("every kernel integrates to its particle's volume, also after rasteriz
     }
 }
 
-TEST_CASE("derived k_s gives interior particles unit axes; the calibration is scale free", "[surface]") {
+TEST_CASE("derived k_s gives interior particles unit axes, and the calibration is scale free", "[surface]") {
     SurfaceParams p;
     p.neighborRadius = 2.5;
     // Weighted variance (weight 1 - (r/R)^3) of the lattice offsets within 2.5 spacings,
