@@ -1,6 +1,7 @@
 #include "sim/FluidMagnetics.hpp"
 
 #include "sim/MagnetizationSolver.hpp"
+#include "sim/ParticleLoops.hpp"
 
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
@@ -13,33 +14,6 @@ namespace ferro {
 
 namespace {
 
-
-template <class F>
-void forEach(size_t n, F&& f) {
-    tbb::parallel_for(tbb::blocked_range<size_t>(0, n, 512), [&](const tbb::blocked_range<size_t>& r) {
-        for (size_t i = r.begin(); i != r.end(); ++i) f(i);
-    });
-}
-
-/// Sum of f(i) in a fixed order of fixed blocks (independent of the thread count).
-template <class F>
-double orderedSum(size_t n, F&& f) {
-    return tbb::parallel_deterministic_reduce(
-        tbb::blocked_range<size_t>(0, n, 2048), 0.0,
-        [&](const tbb::blocked_range<size_t>& r, double acc) {
-            for (size_t i = r.begin(); i != r.end(); ++i) acc += f(i);
-            return acc;
-        },
-        [](double a, double b) { return a + b; });
-}
-
-template <class T>
-void reorder(std::vector<T>& data, const std::vector<uint32_t>& order) {
-    if (data.size() != order.size()) return;
-    std::vector<T> tmp(data.size());
-    forEach(order.size(), [&](size_t k) { tmp[k] = data[order[k]]; });
-    data.swap(tmp);
-}
 
 const char* solverName(MagnetizationParams::Solver s) {
     switch (s) {
@@ -90,15 +64,14 @@ bool FluidMagnetics::solveIsStale() const {
     // changes M, and so the Kelvin force, by about the induced share of it.
     const size_t n = Hext_.size();
     const Real scale = Real(inducedScale_);
-    const double change2 = orderedSum(n, [&](size_t i) { return double((Hext_[i] - scale * HextSolved_[i]).squaredNorm()); });
-    const double now2 = orderedSum(n, [&](size_t i) { return double(Hext_[i].squaredNorm()); });
-    const double relChange = now2 > 0 ? std::sqrt(change2 / now2) : 0.0;
+    const double change2 = deterministicSum(n, [&](size_t i) { return double((Hext_[i] - scale * HextSolved_[i]).squaredNorm()); });
+    const double relChange = extNow2_ > 0 ? std::sqrt(change2 / extNow2_) : 0.0;
     return inducedShare_ * kelvinShare_ * relChange > 0.5 * law_.tolerance;
 }
 
 void FluidMagnetics::applyLaw() {
     const double chi0 = law_.susceptibility, Ms = law_.saturation;
-    forEach(H_.size(), [&](size_t i) {
+    forEachParticle(H_.size(), [&](size_t i) {
         const double h = H_[i].cast<double>().norm();
         M_[i] = h > 0 ? Vec3((H_[i].cast<double>() * (langevinMagnetization(h, chi0, Ms) / h)).cast<Real>())
                       : Vec3::Zero();
@@ -115,13 +88,13 @@ void FluidMagnetics::solve(const std::vector<Vec3>& x, bool forced) {
         // What the cache would have said now: applied field plus the carried induced field.
         predicted.resize(n);
         const Real scale = Real(inducedScale_);
-        forEach(n, [&](size_t i) { predicted[i] = Hext_[i] + scale * Hind_[i]; });
+        forEachParticle(n, [&](size_t i) { predicted[i] = Hext_[i] + scale * Hind_[i]; });
     }
     std::vector<Real> volume(n, Real(volume_));
     const MagnetizationSolver::Stats st = solver_->solve(x, volume, magnets_, H_, M_);
-    forEach(n, [&](size_t i) { Hind_[i] = H_[i] - Hext_[i]; });
-    const double ind2 = orderedSum(n, [&](size_t i) { return double(Hind_[i].squaredNorm()); });
-    const double tot2 = orderedSum(n, [&](size_t i) { return double(H_[i].squaredNorm()); });
+    forEachParticle(n, [&](size_t i) { Hind_[i] = H_[i] - Hext_[i]; });
+    const double ind2 = deterministicSum(n, [&](size_t i) { return double(Hind_[i].squaredNorm()); });
+    const double tot2 = deterministicSum(n, [&](size_t i) { return double(H_[i].squaredNorm()); });
     inducedShare_ = tot2 > 0 ? std::sqrt(ind2 / tot2) : 0.0;
     if (measure && tot2 > 0) {
         // What the cache's drift would have done to the motion: the error of the Kelvin
@@ -132,13 +105,13 @@ void FluidMagnetics::solve(const std::vector<Vec3>& x, bool forced) {
         // linearly with the steps since the last solve; the next cache lives until it would
         // reach half the tolerance, and the interval at most doubles per solve, so one
         // lucky measurement cannot stretch it.
-        const double accErr2 = orderedSum(n, [&](size_t i) {
+        const double accErr2 = deterministicSum(n, [&](size_t i) {
             const double h = H_[i].cast<double>().norm();
             const double chi = h > 0 ? M_[i].cast<double>().norm() / h : 0.0;
             const Vec3d dM = chi * (H_[i] - predicted[i]).cast<double>();
             return (fieldGradient(magnets_, x[i].cast<double>()) * dM).squaredNorm();
         });
-        const double kelvin2 = kelvin_.size() == n ? orderedSum(n, [&](size_t i) { return double(kelvin_[i].squaredNorm()); }) : 0.0;
+        const double kelvin2 = kelvin_.size() == n ? deterministicSum(n, [&](size_t i) { return double(kelvin_[i].squaredNorm()); }) : 0.0;
         const double aRef = std::max(gravity_, std::sqrt(kelvin2 / double(n)));
         const double err = aRef > 0 ? kMu0 / rho0_ * std::sqrt(accErr2 / double(n)) / aRef : 0.0;
         // Part of that difference is no drift at all: both solves carry the solver's own
@@ -155,7 +128,7 @@ void FluidMagnetics::solve(const std::vector<Vec3>& x, bool forced) {
     }
     lastFieldError_ = st.fieldError;
     HextSolved_ = Hext_;
-    extSolved2_ = orderedSum(n, [&](size_t i) { return double(Hext_[i].squaredNorm()); });
+    extSolved2_ = deterministicSum(n, [&](size_t i) { return double(Hext_[i].squaredNorm()); });
     inducedScale_ = 1;
     stepsSinceSolve_ = 1; // steps that use this solve, this one included
     solved_ = true;
@@ -173,7 +146,7 @@ void FluidMagnetics::update(double t, const std::vector<Vec3>& x, const Neighbor
     H_.resize(n, Vec3::Zero());
     M_.resize(n, Vec3::Zero());
     Hind_.resize(n, Vec3::Zero());
-    forEach(n, [&](size_t i) { Hext_[i] = magnetField(magnets_, x[i].cast<double>()).cast<Real>(); });
+    forEachParticle(n, [&](size_t i) { Hext_[i] = magnetField(magnets_, x[i].cast<double>()).cast<Real>(); });
     ++stats_.steps;
     if (!magnetic()) {
         H_ = Hext_;
@@ -183,8 +156,8 @@ void FluidMagnetics::update(double t, const std::vector<Vec3>& x, const Neighbor
         return;
     }
     if (!(forceSolve || !solved_)) {
-        const double now2 = orderedSum(n, [&](size_t i) { return double(Hext_[i].squaredNorm()); });
-        inducedScale_ = extSolved2_ > 0 ? std::sqrt(now2 / extSolved2_) : 1.0;
+        extNow2_ = deterministicSum(n, [&](size_t i) { return double(Hext_[i].squaredNorm()); });
+        inducedScale_ = extSolved2_ > 0 ? std::sqrt(extNow2_ / extSolved2_) : 1.0;
     }
     const bool solving = forceSolve || solveIsStale();
     if (solving) {
@@ -195,14 +168,14 @@ void FluidMagnetics::update(double t, const std::vector<Vec3>& x, const Neighbor
         // cache is scaled with the applied field's RMS strength (inducedScale_, exact for
         // a fading magnet in the linear regime); the drift measurement catches the rest.
         const Real scale = Real(inducedScale_);
-        forEach(n, [&](size_t i) { H_[i] = Hext_[i] + scale * Hind_[i]; });
+        forEachParticle(n, [&](size_t i) { H_[i] = Hext_[i] + scale * Hind_[i]; });
         applyLaw();
         ++stepsSinceSolve_;
     }
     computeKelvin(x, nbr);
     if (solving) {
         // How much the Kelvin force matters beside gravity (see solveIsStale()).
-        const double kelvin2 = orderedSum(n, [&](size_t i) { return double(kelvin_[i].squaredNorm()); });
+        const double kelvin2 = deterministicSum(n, [&](size_t i) { return double(kelvin_[i].squaredNorm()); });
         const double rms = std::sqrt(kelvin2 / double(std::max<size_t>(n, 1)));
         const double aRef = std::max(gravity_, rms);
         kelvinShare_ = aRef > 0 ? rms / aRef : 1.0;
@@ -215,7 +188,7 @@ void FluidMagnetics::computeKelvin(const std::vector<Vec3>& x, const NeighborLis
     const Real scale = Real(kMu0 / rho0_);
     const Real V = Real(volume_);
     const bool pairs = law_.inducedForce && nbr.offset.size() == n + 1;
-    forEach(n, [&](size_t i) {
+    forEachParticle(n, [&](size_t i) {
         // grad H = analytic Jacobian of the magnets (+ SPH difference gradient of the
         // induced field with magnetization.induced_force).
         Eigen::Matrix3f J = fieldGradient(magnets_, x[i].cast<double>()).cast<Real>();
@@ -236,16 +209,16 @@ void FluidMagnetics::computeKelvin(const std::vector<Vec3>& x, const NeighborLis
 
 void FluidMagnetics::addKelvinAcceleration(std::vector<Vec3>& a) const {
     if (kelvin_.size() != a.size()) return;
-    forEach(a.size(), [&](size_t i) { a[i] += kelvin_[i]; });
+    forEachParticle(a.size(), [&](size_t i) { a[i] += kelvin_[i]; });
 }
 
 void FluidMagnetics::permute(const std::vector<uint32_t>& order) {
-    reorder(Hext_, order);
-    reorder(Hind_, order);
-    reorder(H_, order);
-    reorder(M_, order);
-    reorder(kelvin_, order);
-    reorder(HextSolved_, order);
+    ferro::permute(Hext_, order);
+    ferro::permute(Hind_, order);
+    ferro::permute(H_, order);
+    ferro::permute(M_, order);
+    ferro::permute(kelvin_, order);
+    ferro::permute(HextSolved_, order);
 }
 
 void FluidMagnetics::setState(const std::vector<Vec3>& H, const std::vector<Vec3>& M) {

@@ -116,6 +116,7 @@ private:
     double inducedShare_ = 0;                // rms |H_ind| / rms |H| at the last solve
     double kelvinShare_ = 1;                 // rms Kelvin acceleration / (its max with gravity)
     double extSolved2_ = 0;                  // sum |H_ext|^2 at the last solve
+    double extNow2_ = 0;                     // sum |H_ext|^2 this step (between solves)
     double inducedScale_ = 1;                // rms |H_ext| now / at the last solve
     double lastFieldError_ = 0;              // the last solve's estimated relative field error
     size_t stepsSinceSolve_ = 0;

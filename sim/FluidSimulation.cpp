@@ -1,5 +1,6 @@
 #include "sim/FluidSimulation.hpp"
 
+#include "sim/ParticleLoops.hpp"
 #include "sim/SceneFile.hpp"
 
 #include <tbb/blocked_range.h>
@@ -38,34 +39,6 @@ constexpr uint32_t kDenseNeighborhood = 20;
 /// corners of a resting tank (mean speed grew from 2 to 3 cm/s within 2 s); so the
 /// near-wall layer carries extra pressure instead, and the interior is hydrostatic.
 constexpr Real kWallMirror = 1;
-
-template <class F>
-void forEachParticle(size_t n, F&& f) {
-    tbb::parallel_for(tbb::blocked_range<size_t>(0, n, kGrain), [&](const tbb::blocked_range<size_t>& r) {
-        for (size_t i = r.begin(); i != r.end(); ++i) f(i);
-    });
-}
-
-/// Sum over particles whose result does not depend on the thread count or scheduling:
-/// fixed blocks, each summed in order, blocks combined in order.
-template <class F>
-double deterministicSum(size_t n, F&& f) {
-    return tbb::parallel_deterministic_reduce(
-        tbb::blocked_range<size_t>(0, n, 1024), 0.0,
-        [&](const tbb::blocked_range<size_t>& r, double acc) {
-            for (size_t i = r.begin(); i != r.end(); ++i) acc += f(i);
-            return acc;
-        },
-        [](double a, double b) { return a + b; });
-}
-
-template <class T>
-void permute(std::vector<T>& data, const std::vector<uint32_t>& order) {
-    if (data.size() != order.size()) return;
-    std::vector<T> tmp(data.size());
-    forEachParticle(order.size(), [&](size_t k) { tmp[k] = data[order[k]]; });
-    data.swap(tmp);
-}
 
 std::string fmtVec(const Vec3d& p) {
     std::ostringstream s;

@@ -1,0 +1,45 @@
+#pragma once
+// Parallel loops over particles shared by the simulator's parts (FluidSimulation,
+// FluidMagnetics). Sums run in fixed blocks combined in a fixed order, so their results
+// do not depend on the thread count: steps stay repeatable and resume bit for bit.
+#include <tbb/blocked_range.h>
+#include <tbb/parallel_for.h>
+#include <tbb/parallel_reduce.h>
+
+#include <cstddef>
+#include <cstdint>
+#include <vector>
+
+namespace ferro {
+
+/// Calls f(i) for i in [0, n) in parallel.
+template <class F>
+void forEachParticle(size_t n, F&& f) {
+    tbb::parallel_for(tbb::blocked_range<size_t>(0, n, 256), [&](const tbb::blocked_range<size_t>& r) {
+        for (size_t i = r.begin(); i != r.end(); ++i) f(i);
+    });
+}
+
+/// Sum of f(i) over [0, n) whose result does not depend on the thread count or
+/// scheduling: fixed blocks, each summed in order, blocks combined in order.
+template <class F>
+double deterministicSum(size_t n, F&& f) {
+    return tbb::parallel_deterministic_reduce(
+        tbb::blocked_range<size_t>(0, n, 1024), 0.0,
+        [&](const tbb::blocked_range<size_t>& r, double acc) {
+            for (size_t i = r.begin(); i != r.end(); ++i) acc += f(i);
+            return acc;
+        },
+        [](double a, double b) { return a + b; });
+}
+
+/// Reorders `data` so that data[k] = old data[order[k]]; leaves data of another size alone.
+template <class T>
+void permute(std::vector<T>& data, const std::vector<uint32_t>& order) {
+    if (data.size() != order.size()) return;
+    std::vector<T> tmp(data.size());
+    forEachParticle(order.size(), [&](size_t k) { tmp[k] = data[order[k]]; });
+    data.swap(tmp);
+}
+
+} // namespace ferro
