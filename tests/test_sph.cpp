@@ -145,34 +145,56 @@ TEST_CASE("dam break surge front follows Martin & Moyce (1952)", "[sph][slow]") 
     // Martin & Moyce 1952, 2:1 column (n^2 = 2), a = 2.25 in: dimensionless surge front
     // Z = x / a against T = t sqrt(2 g / a), their Table 2, up to T = 2.5.
     //
-    // Known discrepancy: instantaneous-release simulations run ahead of this data at early
-    // times, because the experiment's gate took a finite time to open. Ferro's front (the
-    // leading particle) is 14-20 % ahead at T = 0.8-1.5, at a/20 and a/30 alike, and the
-    // lead shrinks to about 10 % by T = 2.5; the front speed dZ/dT over T = 1.4-2.5, which
-    // the release delay does not shift, matches within 10 %. The test holds these bounds.
+    // Instantaneous-release solvers (VOF, MPS, SPH alike) are known to run ahead of this
+    // data from the second point on while their front speed agrees; the usual explanation
+    // is that the release took a finite time, which offsets the experiment's clock.
+    // Ferro's raw lead is 0.16-0.30 in Z over T = 0.84-2.5 (at a/20 and a/30 alike): a
+    // constant lead, not a growing one, i.e. an offset in time. So the test fits one release delay T0 (the
+    // experiment's T = T0 is the simulation's T = 0), requires it to be a delay of at most
+    // 0.3 (16 ms), and then every data point within 10 %. A wrong front speed or a wrong
+    // collapse shape cannot be hidden by one shift; the front speed is checked on its own.
     const std::vector<std::pair<double, double>> data = {
         {0.41, 1.11}, {0.84, 1.22}, {1.19, 1.44}, {1.43, 1.67}, {1.63, 1.89},
         {1.83, 2.11}, {1.98, 2.33}, {2.20, 2.56}, {2.32, 2.78}, {2.51, 3.00}};
+    const double a = 0.05715, g = 9.81;
+    const double tScale = std::sqrt(a / (2 * g));
+    constexpr double kSample = 0.02;   // dimensionless sampling interval of the simulated front
     for (const char* solver : {"dfsph", "wcsph"}) {
         SimScene scene = loadSimScene(example("dam_break.toml"), {std::string("sim.solver=") + solver});
         FluidSimulation sim(scene);
-        const double a = 0.05715, g = 9.81;
-        const double tScale = std::sqrt(a / (2 * g));
-        std::vector<double> Zsim;
-        for (const auto& [T, Z] : data) {
-            sim.advanceTo(T * tScale);
-            double front = 0;
-            for (const Vec3& p : sim.positions()) front = std::max(front, double(p.x()));
+        // Front Z(T) of the simulation every kSample up to the last data point.
+        std::vector<double> front;
+        for (int k = 0; k * kSample <= data.back().first + 1e-9; ++k) {
+            if (k > 0) sim.advanceTo(k * kSample * tScale);
+            double x = 0;
+            for (const Vec3& p : sim.positions()) x = std::max(x, double(p.x()));
             // The fluid ends half a spacing beyond the last particle centre.
-            Zsim.push_back((front + 0.5 * sim.spacing()) / a);
-            const double err = Zsim.back() / Z - 1;
-            CAPTURE(solver, T, Z, Zsim.back(), err);
-            CHECK(std::abs(err) < (T >= 2.2 ? 0.14 : 0.21));
+            front.push_back((x + 0.5 * sim.spacing()) / a);
         }
-        // Front speed over T = 1.43 .. 2.51 (data points 3 and 9).
+        auto Zsim = [&](double T) {
+            if (T <= 0) return front.front();
+            const double u = T / kSample;
+            const size_t k = std::min(size_t(u), front.size() - 2);
+            return front[k] + (u - double(k)) * (front[k + 1] - front[k]);
+        };
+        auto worstError = [&](double T0) {
+            double worst = 0;
+            for (const auto& [T, Z] : data) worst = std::max(worst, std::abs(Zsim(T - T0) / Z - 1));
+            return worst;
+        };
+        double bestT0 = 0, best = worstError(0);
+        for (double T0 = 0.005; T0 <= 0.5; T0 += 0.005)
+            if (worstError(T0) < best) best = worstError(T0), bestT0 = T0;
+        CAPTURE(solver, worstError(0), bestT0, best);
+        for (const auto& [T, Z] : data) {
+            CAPTURE(T, Z, Zsim(T), Zsim(T - bestT0));
+            CHECK(std::abs(Zsim(T - bestT0) / Z - 1) < 0.10);
+        }
+        CHECK(bestT0 <= 0.3);
+        // Front speed over T = 1.43 .. 2.51 (data points 3 and 9), which no delay shifts.
         const double speedData = (data[9].second - data[3].second) / (data[9].first - data[3].first);
-        const double speedSim = (Zsim[9] - Zsim[3]) / (data[9].first - data[3].first);
-        CAPTURE(solver, speedData, speedSim);
+        const double speedSim = (Zsim(data[9].first) - Zsim(data[3].first)) / (data[9].first - data[3].first);
+        CAPTURE(speedData, speedSim);
         CHECK(speedSim == Approx(speedData).epsilon(0.10));
     }
 }
