@@ -2,6 +2,7 @@
 // hard guarantee of the mesh container: no motion crosses its (0.5 mm thin) wall.
 #include "sim/Container.hpp"
 #include "sim/SceneFile.hpp"
+#include "tests/TestUtil.hpp"
 
 #include <catch2/catch.hpp>
 
@@ -12,13 +13,11 @@
 #include <chrono>
 #include <cmath>
 #include <filesystem>
-#include <fstream>
 #include <limits>
 #include <random>
 
-#include <unistd.h>
-
 using namespace ferro;
+using ferro::test::TempDir;
 namespace fs = std::filesystem;
 
 namespace {
@@ -71,32 +70,12 @@ ContainerParams meshParams(const std::string& file, bool fluidInside = false) {
     return p;
 }
 
-struct TempDir {
-    fs::path path;
-    TempDir() {
-        static int serial = 0;
-        path = fs::temp_directory_path() /
-               ("ferro_container_" + std::to_string(::getpid()) + "_" + std::to_string(serial++));
-        fs::create_directories(path);
-    }
-    ~TempDir() {
-        std::error_code ec;
-        fs::remove_all(path, ec);
-    }
-};
-
 /// Unit cube [0,1]^3 as quads, optionally without its top face.
 std::string cubeObj(bool withTop) {
     std::string s = "v 0 0 0\nv 1 0 0\nv 1 1 0\nv 0 1 0\nv 0 0 1\nv 1 0 1\nv 1 1 1\nv 0 1 1\n"
                     "f 1 4 3 2\nf 1 2 6 5\nf 2 3 7 6\nf 3 4 8 7\nf 4 1 5 8\n";
     if (withTop) s += "f 5 6 7 8\n";
     return s;
-}
-
-std::string writeFile(const TempDir& dir, const std::string& name, const std::string& text) {
-    const std::string path = (dir.path / name).string();
-    std::ofstream(path) << text;
-    return path;
 }
 
 /// Fluid side of the cup, decided from the analytic geometry alone: the cavity (inside
@@ -310,8 +289,8 @@ TEST_CASE("mesh container loads the vessel and rejects open meshes", "[container
     CHECK(lo.z() == 0.0);
     CHECK(hi.z() == Approx(2 * kRim)); // extended upward by the mesh height
 
-    TempDir dir;
-    const std::string open = writeFile(dir, "open.obj", cubeObj(false));
+    TempDir dir("container");
+    const std::string open = dir.write("open.obj", cubeObj(false));
     try {
         makeContainer(meshParams(open), "scene.toml:7");
         FAIL("open mesh accepted");
@@ -328,7 +307,7 @@ TEST_CASE("mesh container loads the vessel and rejects open meshes", "[container
     }
 
     // Scale and translate apply in that order; explicit bounds replace the default box.
-    ContainerParams p = meshParams(writeFile(dir, "cube.obj", cubeObj(true)), true);
+    ContainerParams p = meshParams(dir.write("cube.obj", cubeObj(true)), true);
     p.meshScale = 0.1;
     p.meshTranslate = Vec3d(1, 2, 3);
     p.hasBounds = true;
@@ -590,8 +569,8 @@ TEST_CASE("mesh container: particles pushed against the wall step after step", "
 }
 
 TEST_CASE("mesh container: fluid inside a closed mesh stays inside", "[container]") {
-    TempDir dir;
-    const auto cube = makeContainer(meshParams(writeFile(dir, "cube.obj", cubeObj(true)), true), "s.toml:1");
+    TempDir dir("container");
+    const auto cube = makeContainer(meshParams(dir.write("cube.obj", cubeObj(true)), true), "s.toml:1");
     CHECK(cube->contains(Vec3d(0.5, 0.5, 0.5), 0.1));
     CHECK_FALSE(cube->contains(Vec3d(0.5, 0.5, 1.5), 0)); // above: outside the fluid domain
     std::mt19937 rng(21);

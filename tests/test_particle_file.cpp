@@ -1,6 +1,7 @@
 // Particle files: bit-exact round trip, header layout, an independent reader (assimp),
 // the tolerant reader (ascii, big-endian, mixed types), error messages and atomic writes.
 #include "sim/ParticleFile.hpp"
+#include "tests/TestUtil.hpp"
 
 #include <catch2/catch.hpp>
 
@@ -10,40 +11,14 @@
 #include <algorithm>
 #include <cstring>
 #include <filesystem>
-#include <fstream>
 #include <limits>
 #include <random>
-#include <sstream>
-
-#include <unistd.h>
 
 using namespace ferro;
+using namespace ferro::test;
 namespace fs = std::filesystem;
 
 namespace {
-
-/// A fresh directory under the system temp dir, removed again at scope exit.
-struct TempDir {
-    fs::path path;
-    TempDir() {
-        static int serial = 0;
-        path = fs::temp_directory_path() /
-               ("ferro_io_" + std::to_string(::getpid()) + "_" + std::to_string(serial++));
-        fs::remove_all(path);
-        fs::create_directories(path);
-    }
-    ~TempDir() {
-        std::error_code ec;
-        fs::remove_all(path, ec);
-    }
-    std::string file(const std::string& name) const { return (path / name).string(); }
-    std::vector<std::string> list() const {
-        std::vector<std::string> names;
-        for (const auto& e : fs::directory_iterator(path)) names.push_back(e.path().filename().string());
-        std::sort(names.begin(), names.end());
-        return names;
-    }
-};
 
 ParticleTable sampleTable(size_t rows, unsigned seed = 7) {
     ParticleTable t;
@@ -61,18 +36,6 @@ ParticleTable sampleTable(size_t rows, unsigned seed = 7) {
     }
     t.comments = {{"frame", "12"}, {"time", "0.4"}, {"note", "two  spaced words"}, {"empty", ""}};
     return t;
-}
-
-std::string readAll(const std::string& path) {
-    std::ifstream in(path, std::ios::binary);
-    std::stringstream ss;
-    ss << in.rdbuf();
-    return ss.str();
-}
-
-void writeBytes(const std::string& path, const std::string& bytes) {
-    std::ofstream out(path, std::ios::binary);
-    out << bytes;
 }
 
 std::string errorOf(const std::string& path) {
@@ -94,7 +57,7 @@ void putBigEndian(std::string& out, T value) {
 } // namespace
 
 TEST_CASE("particle file round trip is bit-exact and keeps comments", "[io]") {
-    TempDir dir;
+    TempDir dir("io");
     const std::string path = dir.file("frame.ply");
     const ParticleTable t = sampleTable(1000);
     writeParticleFile(path, t);
@@ -109,7 +72,7 @@ TEST_CASE("particle file round trip is bit-exact and keeps comments", "[io]") {
     CHECK(r.commentNumber("time", -1) == Approx(0.4));
 
     // Header layout: exact lines, then exactly rows * columns float32 values.
-    const std::string bytes = readAll(path);
+    const std::string bytes = slurp(path);
     const std::string header = "ply\nformat binary_little_endian 1.0\n"
                                "comment frame 12\ncomment time 0.4\ncomment note two  spaced words\n"
                                "comment empty\nelement vertex 1000\n"
@@ -127,7 +90,7 @@ TEST_CASE("particle file round trip is bit-exact and keeps comments", "[io]") {
 }
 
 TEST_CASE("particle files are readable by assimp's PLY importer", "[io]") {
-    TempDir dir;
+    TempDir dir("io");
     const std::string path = dir.file("cloud.ply");
     ParticleTable t = sampleTable(500, 11);
     t.values[2] = 0.5f; // keep every coordinate finite and modest for the importer
@@ -148,7 +111,7 @@ TEST_CASE("particle files are readable by assimp's PLY importer", "[io]") {
 }
 
 TEST_CASE("large particle files round trip", "[io]") {
-    TempDir dir;
+    TempDir dir("io");
     const std::string path = dir.file("big.ply");
     ParticleTable t = sampleTable(200000, 3);
     t.names.insert(t.names.end(), {"hx", "hy", "hz", "mx", "my", "mz"});
@@ -161,7 +124,7 @@ TEST_CASE("large particle files round trip", "[io]") {
 }
 
 TEST_CASE("broken particle files give one-line errors naming the file", "[io]") {
-    TempDir dir;
+    TempDir dir("io");
     const std::string path = dir.file("frame.ply");
     writeParticleFile(path, sampleTable(1000));
 
@@ -177,41 +140,41 @@ TEST_CASE("broken particle files give one-line errors naming the file", "[io]") 
         std::string junk(4096, '\0');
         std::mt19937 rng(5);
         for (char& c : junk) c = char(rng());
-        writeBytes(path, junk);
+        spit(path, junk);
         CHECK(errorOf(path) == path + ": not a PLY file");
     }
     SECTION("empty") {
-        writeBytes(path, "");
+        spit(path, "");
         CHECK(errorOf(path) == path + ": not a PLY file");
     }
     SECTION("missing") {
         CHECK(errorOf(dir.file("nope.ply")) == dir.file("nope.ply") + ": cannot open");
     }
     SECTION("list property in the vertex element") {
-        writeBytes(path, "ply\nformat ascii 1.0\nelement vertex 1\nproperty float x\n"
+        spit(path, "ply\nformat ascii 1.0\nelement vertex 1\nproperty float x\n"
                          "property list uchar int idx\nend_header\n1 0\n");
         CHECK(errorOf(path).find("list property") != std::string::npos);
     }
     SECTION("first element is not vertex") {
-        writeBytes(path, "ply\nformat ascii 1.0\nelement face 0\nproperty list uchar int idx\n"
+        spit(path, "ply\nformat ascii 1.0\nelement face 0\nproperty list uchar int idx\n"
                          "element vertex 1\nproperty float x\nend_header\n1\n");
         CHECK(errorOf(path).find("not 'vertex'") != std::string::npos);
     }
     SECTION("ascii with too few values") {
-        writeBytes(path, "ply\nformat ascii 1.0\nelement vertex 3\nproperty float x\n"
+        spit(path, "ply\nformat ascii 1.0\nelement vertex 3\nproperty float x\n"
                          "property float y\nend_header\n1 2\n3 4\n5\n");
         CHECK(errorOf(path) == path + ": truncated (expected 3 vertices)");
     }
     SECTION("ascii with a bad number") {
-        writeBytes(path, "ply\nformat ascii 1.0\nelement vertex 2\nproperty float x\nend_header\n1\nabc\n");
+        spit(path, "ply\nformat ascii 1.0\nelement vertex 2\nproperty float x\nend_header\n1\nabc\n");
         CHECK(errorOf(path).find("bad ascii value") != std::string::npos);
     }
 }
 
 TEST_CASE("ascii PLY with mixed types, obj_info and a later element", "[io]") {
-    TempDir dir;
+    TempDir dir("io");
     const std::string path = dir.file("ascii.ply");
-    writeBytes(path, "ply\r\nformat ascii 1.0\r\ncomment frame 3\r\nobj_info made by hand\r\n"
+    spit(path, "ply\r\nformat ascii 1.0\r\ncomment frame 3\r\nobj_info made by hand\r\n"
                      "element vertex 3\r\nproperty float x\r\nproperty double y\r\nproperty int z\r\n"
                      "property uchar flag\r\nelement face 1\r\nproperty list uchar int vertex_indices\r\n"
                      "end_header\r\n1.5 2.25 -3 255\r\n-0.5 1e-3 7 0\r\n+2 -inf 0 1\r\n3 0 1 2\r\n");
@@ -230,7 +193,7 @@ TEST_CASE("ascii PLY with mixed types, obj_info and a later element", "[io]") {
 }
 
 TEST_CASE("big-endian binary PLY with every scalar type", "[io]") {
-    TempDir dir;
+    TempDir dir("io");
     const std::string path = dir.file("be.ply");
     std::string bytes = "ply\nformat binary_big_endian 1.0\nelement vertex 2\n"
                         "property char a\nproperty uint8 b\nproperty short c\nproperty ushort d\n"
@@ -247,7 +210,7 @@ TEST_CASE("big-endian binary PLY with every scalar type", "[io]") {
         putBigEndian<float>(bytes, 0.1f * float(s));
         putBigEndian<double>(bytes, 1e300 * s); // beyond float: saturates to +-inf
     }
-    writeBytes(path, bytes);
+    spit(path, bytes);
     const ParticleTable t = readParticleFile(path);
     REQUIRE(t.rows() == 2);
     const std::vector<float> row0{-5, 200, -300, 60000, -70000, 4e9f, 0.1f, std::numeric_limits<float>::infinity()};
@@ -258,7 +221,7 @@ TEST_CASE("big-endian binary PLY with every scalar type", "[io]") {
 }
 
 TEST_CASE("particle file writes are atomic", "[io]") {
-    TempDir dir;
+    TempDir dir("io");
     const std::string path = dir.file("frame.ply");
 
     SECTION("overwrite leaves only the target") {
@@ -275,14 +238,14 @@ TEST_CASE("particle file writes are atomic", "[io]") {
     }
     SECTION("a failed write leaves the old target untouched and no temp file") {
         writeParticleFile(path, sampleTable(10, 1));
-        const std::string before = readAll(path);
+        const std::string before = slurp(path);
         ParticleTable bad = sampleTable(10, 2);
         bad.names[1] = "two words";
         CHECK_THROWS_AS(writeParticleFile(path, bad), ParticleFileError);
         bad = sampleTable(10, 2);
         bad.values.pop_back(); // not a whole number of rows
         CHECK_THROWS_AS(writeParticleFile(path, bad), ParticleFileError);
-        CHECK(readAll(path) == before);
+        CHECK(slurp(path) == before);
         CHECK(dir.list() == std::vector<std::string>{"frame.ply"});
     }
     SECTION("a failed rename removes the temp file") {

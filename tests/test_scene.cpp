@@ -1,14 +1,14 @@
 // Scene files: parsing, defaults, validation messages and --set overrides.
 #include "sim/SceneFile.hpp"
+#include "tests/TestUtil.hpp"
 
 #include <catch2/catch.hpp>
 
 #include <filesystem>
-#include <fstream>
 #include <functional>
-#include <unistd.h>
 
 using namespace ferro;
+using ferro::test::TempDir;
 using Catch::Matchers::Contains;
 
 namespace {
@@ -42,26 +42,6 @@ SimScene scene(const std::string& text, const std::vector<std::string>& override
 {
     return parseSimScene(SceneDocument::parse(text, "t.toml", overrides));
 }
-
-// A fresh directory for files a test writes; removed at the end of the test.
-struct TempDir {
-    std::filesystem::path dir;
-    explicit TempDir(const std::string& tag)
-        : dir(std::filesystem::temp_directory_path() /
-              ("ferro_test_scene_" + tag + "_" + std::to_string(::getpid())))
-    {
-        std::filesystem::remove_all(dir);
-        std::filesystem::create_directories(dir);
-    }
-    ~TempDir() { std::filesystem::remove_all(dir); }
-    std::string write(const std::string& name, const std::string& text) const
-    {
-        std::filesystem::path p = dir / name;
-        std::filesystem::create_directories(p.parent_path());
-        std::ofstream(p) << text;
-        return p.string();
-    }
-};
 
 } // namespace
 
@@ -212,7 +192,7 @@ bounds_max = [1, 1, 1]
     SimScene s = loadSimScene(path);
     const ContainerParams& c = s.container;
     CHECK(c.type == ContainerParams::Type::Mesh);
-    CHECK(std::filesystem::equivalent(c.meshFile, tmp.dir / "meshes" / "bowl.obj"));
+    CHECK(std::filesystem::equivalent(c.meshFile, tmp.path / "meshes" / "bowl.obj"));
     CHECK(c.meshScale == 0.01);
     CHECK(c.meshTranslate == Vec3d(0, 0, 0.1));
     CHECK(c.fluidInside);
@@ -432,7 +412,7 @@ TEST_CASE("loading files", "[scene]")
     TempDir tmp("load");
     SECTION("a missing file")
     {
-        std::string path = (tmp.dir / "absent.toml").string();
+        std::string path = (tmp.path / "absent.toml").string();
         CHECK(errorOf([&] { SceneDocument::load(path); }) == path + ": cannot open scene file");
     }
     SECTION("a syntax error names file and line")

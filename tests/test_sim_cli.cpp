@@ -1,6 +1,7 @@
 // ferro-sim as users run it: exit codes, one-line errors, particle files, --resume after
 // a kill, never losing frames already written.
 #include "sim/ParticleFile.hpp"
+#include "tests/TestUtil.hpp"
 
 #include <catch2/catch.hpp>
 
@@ -8,8 +9,6 @@
 #include <csignal>
 #include <cstdio>
 #include <filesystem>
-#include <fstream>
-#include <sstream>
 #include <thread>
 
 #include <sys/wait.h>
@@ -17,27 +16,15 @@
 
 namespace fs = std::filesystem;
 using namespace ferro;
+using namespace ferro::test;
 
 namespace {
 
 const std::string kSim = std::string(FERRO_BINARY_DIR) + "/bin/ferro-sim";
 std::string example(const std::string& name) { return std::string(FERRO_SOURCE_DIR) + "/examples/" + name; }
 
-struct Result {
-    int code;
-    std::string err;
-};
-
-/// Runs a shell command, returning its exit code and standard error.
-Result run(const std::string& cmd) {
-    const std::string errFile = (fs::temp_directory_path() / ("ferro_err_" + std::to_string(getpid()))).string();
-    const int status = std::system((cmd + " 2>" + errFile).c_str());
-    std::ifstream in(errFile);
-    std::stringstream ss;
-    ss << in.rdbuf();
-    fs::remove(errFile);
-    return {WIFEXITED(status) ? WEXITSTATUS(status) : -1, ss.str()};
-}
+/// Runs a shell command, returning its exit code and standard error (in `output`).
+CommandResult run(const std::string& cmd) { return runCommand(cmd, Capture::Stderr); }
 
 fs::path freshDir(const std::string& name) {
     const fs::path dir = fs::temp_directory_path() / ("ferro_test_" + name + "_" + std::to_string(getpid()));
@@ -52,22 +39,15 @@ std::string frame(const fs::path& dir, int f) {
     return (dir / name).string();
 }
 
-std::string slurp(const std::string& path) {
-    std::ifstream in(path, std::ios::binary);
-    std::stringstream ss;
-    ss << in.rdbuf();
-    return ss.str();
-}
-
 int lines(const std::string& s) { return int(std::count(s.begin(), s.end(), '\n')); }
 
 } // namespace
 
 TEST_CASE("ferro-sim writes readable frames with the documented header", "[cli]") {
     const fs::path dir = freshDir("frames");
-    const Result r = run(kSim + " " + example("dam_break.toml") + " --out " + dir.string() + " --max-frames 2 --quiet");
+    const CommandResult r = run(kSim + " " + example("dam_break.toml") + " --out " + dir.string() + " --max-frames 2 --quiet");
     REQUIRE(r.code == 0);
-    REQUIRE(r.err.empty());
+    REQUIRE(r.output.empty());
     for (int f = 0; f <= 2; ++f) {
         const ParticleTable t = readParticleFile(frame(dir, f));
         REQUIRE(t.names == std::vector<std::string>{"x", "y", "z", "vx", "vy", "vz", "density", "pressure", "hx", "hy", "hz", "mx", "my", "mz"});
@@ -78,10 +58,10 @@ TEST_CASE("ferro-sim writes readable frames with the documented header", "[cli]"
     }
     REQUIRE(!fs::exists(frame(dir, 3)));
     // A second run refuses to overwrite the frames.
-    const Result again = run(kSim + " " + example("dam_break.toml") + " --out " + dir.string() + " --max-frames 2");
+    const CommandResult again = run(kSim + " " + example("dam_break.toml") + " --out " + dir.string() + " --max-frames 2");
     REQUIRE(again.code == 2);
-    REQUIRE(lines(again.err) == 1);
-    REQUIRE(again.err.find("--resume") != std::string::npos);
+    REQUIRE(lines(again.output) == 1);
+    REQUIRE(again.output.find("--resume") != std::string::npos);
     fs::remove_all(dir);
 }
 
@@ -101,27 +81,27 @@ TEST_CASE("ferro-sim rejects bad input with one line and exit code 2", "[cli]") 
         {"--max-frames -3", "--max-frames"},
     };
     for (const Case& c : cases) {
-        const Result r = run(kSim + " " + example("dam_break.toml") + " --out " + dir.string() + " " + c.args);
-        CAPTURE(c.args, r.err);
+        const CommandResult r = run(kSim + " " + example("dam_break.toml") + " --out " + dir.string() + " " + c.args);
+        CAPTURE(c.args, r.output);
         REQUIRE(r.code == 2);
-        REQUIRE(lines(r.err) == 1);
-        REQUIRE(r.err.find(c.needle) != std::string::npos);
+        REQUIRE(lines(r.output) == 1);
+        REQUIRE(r.output.find(c.needle) != std::string::npos);
     }
-    const Result missing = run(kSim + " /nonexistent/scene.toml --out " + dir.string());
+    const CommandResult missing = run(kSim + " /nonexistent/scene.toml --out " + dir.string());
     REQUIRE(missing.code == 2);
-    REQUIRE(lines(missing.err) == 1);
+    REQUIRE(lines(missing.output) == 1);
     fs::remove_all(dir);
 }
 
 TEST_CASE("a blow-up stops with a clear message and keeps the frames written", "[cli]") {
     const fs::path dir = freshDir("nan");
     // Absurd gravity overflows float velocities within a few steps.
-    const Result r = run(kSim + " " + example("dam_break.toml") + " --out " + dir.string() +
-                         " --quiet --set sim.gravity=[0.0,0.0,-1e37] --set sim.min_dt=1e-30");
-    CAPTURE(r.err);
+    const CommandResult r = run(kSim + " " + example("dam_break.toml") + " --out " + dir.string() +
+                                " --quiet --set sim.gravity=[0.0,0.0,-1e37] --set sim.min_dt=1e-30");
+    CAPTURE(r.output);
     REQUIRE(r.code == 3);
-    REQUIRE(lines(r.err) == 1);
-    REQUIRE(r.err.find("non-finite") != std::string::npos);
+    REQUIRE(lines(r.output) == 1);
+    REQUIRE(r.output.find("non-finite") != std::string::npos);
     REQUIRE(fs::exists(frame(dir, 0)));
     REQUIRE(readParticleFile(frame(dir, 0)).rows() == 3200);
     fs::remove_all(dir);
@@ -153,8 +133,8 @@ TEST_CASE("a run killed mid-way and resumed matches an uninterrupted run", "[cli
     std::vector<std::string> before;
     for (int f = 0; f < written; ++f) before.push_back(slurp(frame(cut, f)));
 
-    const Result resumed = run(kSim + " " + example("dam_break.toml") + " --out " + cut.string() + args + " --resume");
-    CAPTURE(resumed.err);
+    const CommandResult resumed = run(kSim + " " + example("dam_break.toml") + " --out " + cut.string() + args + " --resume");
+    CAPTURE(resumed.output);
     REQUIRE(resumed.code == 0);
     // Frames already written are untouched.
     for (int f = 0; f < written; ++f) REQUIRE(slurp(frame(cut, f)) == before[size_t(f)]);

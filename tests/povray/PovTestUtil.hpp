@@ -2,18 +2,16 @@
 // Helpers shared by the ferro-pov tests: scratch directories, shell commands, a UV sphere
 // built in memory, and a reader for the PPM images POV-Ray writes with +FP.
 #include "surface/TriangleMesh.hpp"
+#include "tests/TestUtil.hpp"
 
 #include <cmath>
 #include <cstdio>
-#include <cstdlib>
 #include <filesystem>
 #include <fstream>
-#include <sstream>
 #include <stdexcept>
 #include <string>
 #include <vector>
 
-#include <sys/wait.h>
 #include <unistd.h>
 
 namespace ferro::povtest {
@@ -23,22 +21,13 @@ namespace fs = std::filesystem;
 inline const std::string kBin = std::string(FERRO_BINARY_DIR) + "/bin/";
 inline const std::string kSource = FERRO_SOURCE_DIR;
 
-struct Result {
-    int code;
-    std::string out; ///< standard output and error together
-};
+using test::slurp;
+using test::spit;
+using Result = test::CommandResult;
 
-/// Runs `cmd` with /bin/sh, returning its exit code and its output.
-inline Result run(const std::string& cmd)
-{
-    const std::string outFile = (fs::temp_directory_path() / ("ferro_pov_out_" + std::to_string(getpid()))).string();
-    const int status = std::system(("(" + cmd + ") >" + outFile + " 2>&1").c_str());
-    std::ifstream in(outFile);
-    std::stringstream ss;
-    ss << in.rdbuf();
-    fs::remove(outFile);
-    return {WIFEXITED(status) ? WEXITSTATUS(status) : -1, ss.str()};
-}
+/// Runs `cmd` with /bin/sh, returning its exit code and its standard output and error
+/// together (in `output`).
+inline Result run(const std::string& cmd) { return test::runCommand(cmd, test::Capture::StdoutAndStderr); }
 
 /// An empty scratch directory under the build tree.
 inline fs::path freshDir(const std::string& name)
@@ -47,20 +36,6 @@ inline fs::path freshDir(const std::string& name)
     fs::remove_all(dir);
     fs::create_directories(dir);
     return dir;
-}
-
-inline std::string slurp(const fs::path& path)
-{
-    std::ifstream in(path, std::ios::binary);
-    std::stringstream ss;
-    ss << in.rdbuf();
-    return ss.str();
-}
-
-inline void spit(const fs::path& path, const std::string& text)
-{
-    std::ofstream out(path, std::ios::binary);
-    out << text;
 }
 
 /// A UV sphere of `radius` [m] around `center` with exact outward normals.

@@ -62,13 +62,13 @@ TEST_CASE("ferro-pov keeps an edited look.inc, and --force-template replaces it"
 
     // Re-export with another [render] (the master scene changes): the edit survives.
     Result res = run(base + " --frame 3 --set render.width=64");
-    INFO(res.out);
+    INFO(res.output);
     REQUIRE(res.code == 0);
     CHECK(slurp(look) == edited);
     CHECK(slurp(dir / "shot" / "render.ini").find("Width=64") != std::string::npos);
     // ... and POV-Ray renders it red.
     res = renderFrame(dir / "shot", 3, 48, 36, "edited");
-    INFO(res.out);
+    INFO(res.output);
     REQUIRE(res.code == 0);
 
     res = run(base + " --frame 3 --force-template");
@@ -86,7 +86,7 @@ TEST_CASE("ferro-pov writes a frame range and leaves unchanged shot files alone"
     const std::string cmd = kPov + " '" + (dir / "m" / "spiky_{:04}.ply").string() + "' --frames 1:3 --scene '" +
                             (dir / "scene.toml").string() + "' --out '" + (dir / "shot").string() + "' --quiet";
     Result res = run(cmd);
-    INFO(res.out);
+    INFO(res.output);
     REQUIRE(res.code == 0);
     CHECK_FALSE(fs::exists(dir / "shot" / "mesh_0000.inc"));
     for (int f = 1; f <= 3; ++f) {
@@ -102,7 +102,7 @@ TEST_CASE("ferro-pov writes a frame range and leaves unchanged shot files alone"
 
     // Every exported frame renders (frame 0 was not exported).
     res = run("cd '" + (dir / "shot").string() + "' && povray shot.ini -D +FP +SF1 +EF3");
-    INFO(res.out);
+    INFO(res.output);
     CHECK(res.code == 0);
     CHECK(fs::exists(dir / "shot" / "frames" / "shot_3.ppm"));
 }
@@ -116,17 +116,17 @@ TEST_CASE("ferro-pov rejects bad input with one line and exit code 2", "[pov][cl
     const std::string scene = " --scene '" + (dir / "scene.toml").string() + "' --out '" + (dir / "shot").string() + "'";
 
     auto oneLineError = [](const Result& r) {
-        INFO(r.out);
+        INFO(r.output);
         CHECK(r.code == 2);
-        CHECK(r.out.rfind("ferro-pov: error: ", 0) == 0);
-        CHECK(std::count(r.out.begin(), r.out.end(), '\n') == 1);
+        CHECK(r.output.rfind("ferro-pov: error: ", 0) == 0);
+        CHECK(std::count(r.output.begin(), r.output.end(), '\n') == 1);
     };
     // Missing meshes are I/O errors (exit 4), like ferro-surface's and ferro-spikes' inputs.
     auto missingError = [](const Result& r) {
-        INFO(r.out);
+        INFO(r.output);
         CHECK(r.code == 4);
-        CHECK(r.out.rfind("ferro-pov: error: ", 0) == 0);
-        CHECK(std::count(r.out.begin(), r.out.end(), '\n') == 1);
+        CHECK(r.output.rfind("ferro-pov: error: ", 0) == 0);
+        CHECK(std::count(r.output.begin(), r.output.end(), '\n') == 1);
     };
     missingError(run(kPov + " '" + (dir / "missing.ply").string() + "'" + scene + " --frame 0"));
     missingError(run(kPov + " '" + (dir / "m_{:04}.ply").string() + "'" + scene + " --frames 0:2"));
@@ -147,7 +147,7 @@ TEST_CASE("ferro-pov rejects bad input with one line and exit code 2", "[pov][cl
     {
         const Result r = run(kPov + " '" + (dir / "nan.ply").string() + "'" + scene + " --frame 0");
         oneLineError(r);
-        CHECK(r.out.find("not finite") != std::string::npos);
+        CHECK(r.output.find("not finite") != std::string::npos);
     }
     oneLineError(run(kPov + " '" + (dir / "mesh.ply").string() + "'" + scene + " --set render.widht=3"));
     oneLineError(run(kPov + " '" + (dir / "mesh.ply").string() + "' --scene '" + (dir / "bad.toml").string() +

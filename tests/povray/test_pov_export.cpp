@@ -211,7 +211,7 @@ current = 100.0
     exporter.exportFrame(sphereMesh(ball.cast<float>(), 0.012f), 2);
     const int W = 96, H = 72;
     const Result res = renderFrame(dir, 2, W, H, "frame");
-    INFO(res.out);
+    INFO(res.output);
     REQUIRE(res.code == 0);
     const Image img = readPpm(dir / "frame.ppm");
     REQUIRE(img.width == W);
@@ -241,7 +241,7 @@ TEST_CASE("povray parses an empty frame and a frame without magnets", "[pov][pov
     exporter.exportFrame(TriangleMesh{}, 0);
     CHECK(slurp(dir / "magnets_0000.inc").find("FerroMagnetCount = 0;") != std::string::npos);
     const Result res = renderFrame(dir, 0, 32, 24, "empty");
-    INFO(res.out);
+    INFO(res.output);
     CHECK(res.code == 0);
     CHECK(readPpm(dir / "empty.ppm").brightness(16, 2, 1) > 0.25);
 }
@@ -255,7 +255,7 @@ TEST_CASE("povray shot.ini renders a frame range through POV-Ray's animation opt
     for (int f = 0; f <= 5; ++f)
         exporter.exportFrame(sphereMesh(Vec3(0, 0, 0.005f + 0.002f * f), 0.01f, 12, 6), f);
     const Result res = run("cd '" + dir.string() + "' && povray shot.ini -D +W16 +H12 +SF2 +EF3");
-    INFO(res.out);
+    INFO(res.output);
     REQUIRE(res.code == 0);
     // Final_Frame = 5 has one digit, so POV-Ray names the frames shot_2.png, shot_3.png.
     CHECK(fs::exists(dir / "frames" / "shot_2.png"));

@@ -104,7 +104,7 @@ TEST_CASE("shot.sh renders a tiny shot, and make re-runs exactly the stale frame
 
     Result res = run("FERRO_BIN='" + bin + "' '" + kSource + "/scripts/shot.sh' '" + (dir / "tiny.toml").string() + "' '" +
                      out.string() + "' -j2");
-    INFO(res.out);
+    INFO(res.output);
     REQUIRE(res.code == 0);
     for (int f = 0; f <= 3; ++f)
         CHECK(fs::exists(out / "png" / ("frame_000" + std::to_string(f) + ".png")));
@@ -116,7 +116,7 @@ TEST_CASE("shot.sh renders a tiny shot, and make re-runs exactly the stale frame
     // A second make has nothing to do.
     CHECK(run(make + "-q").code == 0);
     res = run(make + "-n");
-    CHECK(res.out.find("Nothing to be done") != std::string::npos);
+    CHECK(res.output.find("Nothing to be done") != std::string::npos);
 
     // One frame's particles change: only that frame is re-meshed, re-exported, re-rendered.
     touchNow(out / "particles" / "particles_0002.ply", dir);
@@ -124,10 +124,10 @@ TEST_CASE("shot.sh renders a tiny shot, and make re-runs exactly the stale frame
     for (int f = 0; f <= 3; ++f)
         rendered[f] = fs::last_write_time(out / "png" / ("frame_000" + std::to_string(f) + ".png"));
     res = run(make + "-n frames");
-    INFO(res.out);
-    CHECK(perFrame(res.out, "ferro-surface particles") == std::map<std::string, int>{{"0002", 1}});
-    CHECK(perFrame(res.out, "ferro-pov") == std::map<std::string, int>{{"0002", 1}});
-    CHECK(perFrame(res.out, "povray render.ini") == std::map<std::string, int>{{"0002", 1}});
+    INFO(res.output);
+    CHECK(perFrame(res.output, "ferro-surface particles") == std::map<std::string, int>{{"0002", 1}});
+    CHECK(perFrame(res.output, "ferro-pov") == std::map<std::string, int>{{"0002", 1}});
+    CHECK(perFrame(res.output, "povray render.ini") == std::map<std::string, int>{{"0002", 1}});
     res = run(make + "-j2 frames");
     REQUIRE(res.code == 0);
     for (int f = 0; f <= 3; ++f) {
@@ -143,10 +143,10 @@ TEST_CASE("shot.sh renders a tiny shot, and make re-runs exactly the stale frame
     spit(dir / "tiny.toml", scene);
     touchNow(dir / "tiny.toml", dir);
     res = run(make + "-n frames");
-    INFO(res.out);
-    CHECK(perFrame(res.out, "povray render.ini").size() == 4);
-    CHECK(perFrame(res.out, "ferro-surface particles").empty());
-    CHECK(perFrame(res.out, "--no-shot").empty());
+    INFO(res.output);
+    CHECK(perFrame(res.output, "povray render.ini").size() == 4);
+    CHECK(perFrame(res.output, "ferro-surface particles").empty());
+    CHECK(perFrame(res.output, "--no-shot").empty());
     REQUIRE(run(make + "-j2 frames").code == 0);
     CHECK(run(make + "-q frames").code == 0);
 
@@ -158,8 +158,8 @@ TEST_CASE("shot.sh renders a tiny shot, and make re-runs exactly the stale frame
     // The artists' look changes: every frame re-renders.
     touchNow(out / "shot" / "look.inc", dir);
     res = run(make + "-n frames");
-    CHECK(perFrame(res.out, "povray render.ini").size() == 4);
-    CHECK(perFrame(res.out, "ferro-surface particles").empty());
+    CHECK(perFrame(res.output, "povray render.ini").size() == 4);
+    CHECK(perFrame(res.output, "ferro-surface particles").empty());
     REQUIRE(run(make + "-j2 frames").code == 0);
 
     // The farm: frames 1..2 again on "this machine" through GNU parallel ("01": leading zeros
@@ -170,7 +170,7 @@ TEST_CASE("shot.sh renders a tiny shot, and make re-runs exactly the stale frame
         fs::remove(out / "png" / "frame_0001.png");
         fs::remove(out / "png" / "frame_0002.png");
         res = run("'" + kSource + "/scripts/farm.sh' '" + out.string() + "' --frames 01:02 --sshlogin : --no-video");
-        INFO(res.out);
+        INFO(res.output);
         REQUIRE(res.code == 0);
         CHECK(fs::exists(out / "png" / "frame_0001.png"));
         CHECK(fs::exists(out / "png" / "frame_0002.png"));
@@ -191,7 +191,7 @@ TEST_CASE("shot.sh renders a tiny shot, and make re-runs exactly the stale frame
     scene.replace(scene.find("count = 300"), 11, "count = 290");
     spit(dir / "tiny.toml", scene);
     res = run(make + "prepare FERRO_BIN='" + failing.string() + "'");
-    INFO(res.out);
+    INFO(res.output);
     CHECK(res.code != 0);
     CHECK(slurp(out / "particles" / "particles_0000.ply") == frame0);
     CHECK(fs::exists(out / "particles" / "particles_0003.ply"));
@@ -208,18 +208,18 @@ TEST_CASE("shot.sh rejects bad arguments with one line and exit code 2", "[pov][
     const std::string shot = "FERRO_BIN='" + pipelineBin(dir) + "' '" + kSource + "/scripts/shot.sh' ";
     Result res = run(shot + "'" + (dir / "missing.toml").string() + "' '" + (dir / "out").string() + "'");
     CHECK(res.code == 2);
-    CHECK(res.out.rfind("shot.sh: error: ", 0) == 0);
+    CHECK(res.output.rfind("shot.sh: error: ", 0) == 0);
     spit(dir / "tiny.toml", kTinyScene);
     res = run(shot + "'" + (dir / "tiny.toml").string() + "' '" + (dir / "out").string() + "' --frames 5");
     CHECK(res.code == 2);
     res = run(shot + "'" + (dir / "tiny.toml").string() + "' '" + (dir / "out").string() + "' --frames 0:99");
     CHECK(res.code == 2);
-    CHECK(res.out.find("ends at frame 3") != std::string::npos);
+    CHECK(res.output.find("ends at frame 3") != std::string::npos);
     // "08" is eight, not a bad octal number to bash.
     res = run(shot + "'" + (dir / "tiny.toml").string() + "' '" + (dir / "out").string() + "' --frames 08:09");
-    INFO(res.out);
+    INFO(res.output);
     CHECK(res.code == 2);
-    CHECK(res.out.find("ends at frame 3") != std::string::npos);
+    CHECK(res.output.find("ends at frame 3") != std::string::npos);
     res = run(shot + "'" + (dir / "tiny.toml").string() + "' '" + (dir / "out").string() + "' --frames 0:99999999999");
     CHECK(res.code == 2);
 }

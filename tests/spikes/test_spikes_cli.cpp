@@ -5,14 +5,13 @@
 #include "sim/ParticleFile.hpp"
 #include "sim/SceneFile.hpp"
 #include "spikes/SpikeFrames.hpp"
+#include "tests/TestUtil.hpp"
 
 #include <catch2/catch.hpp>
 
 #include <cmath>
-#include <cstdlib>
 #include <filesystem>
 #include <fstream>
-#include <sstream>
 
 using namespace ferro;
 namespace fs = std::filesystem;
@@ -30,16 +29,12 @@ fs::path scratch(const std::string& name)
     return dir;
 }
 
-// Runs a command; returns its exit code and stderr.
-int run(const std::string& args, std::string& err, const fs::path& dir)
+// Runs ferro-spikes with `args`; returns its exit code and stderr.
+int run(const std::string& args, std::string& err, const fs::path&)
 {
-    const fs::path errFile = dir / "stderr.txt";
-    const int status = std::system((kExe + " " + args + " 2> " + errFile.string()).c_str());
-    std::ifstream in(errFile);
-    std::stringstream s;
-    s << in.rdbuf();
-    err = s.str();
-    return WIFEXITED(status) ? WEXITSTATUS(status) : -1;
+    const test::CommandResult r = test::runCommand(kExe + " " + args, test::Capture::Stderr);
+    err = r.output;
+    return r.code;
 }
 
 std::string comment(const TriangleMesh& mesh, const std::string& key)

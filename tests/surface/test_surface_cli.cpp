@@ -3,17 +3,15 @@
 
 #include "sim/ParticleFile.hpp"
 #include "surface/TriangleMesh.hpp"
+#include "tests/TestUtil.hpp"
 
 #include <openvdb/openvdb.h>
 
 #include <catch2/catch.hpp>
 
-#include <cstdlib>
 #include <filesystem>
 #include <fstream>
-#include <sstream>
 
-#include <sys/wait.h>
 #include <unistd.h>
 
 using namespace ferro;
@@ -35,17 +33,11 @@ struct Scratch {
     std::string operator/(const std::string& name) const { return (dir / name).string(); }
 };
 
-/// Runs the command; returns its exit code, stderr in `err`.
-int run(const std::string& args, const Scratch& s, std::string* err = nullptr) {
-    const std::string errFile = s / "stderr.txt";
-    const int status = std::system((kExe + " " + args + " 2> '" + errFile + "'").c_str());
-    if (err) {
-        std::ifstream in(errFile);
-        std::stringstream ss;
-        ss << in.rdbuf();
-        *err = ss.str();
-    }
-    return WIFEXITED(status) ? WEXITSTATUS(status) : -1;
+/// Runs ferro-surface with `args`; returns its exit code, stderr in `err`.
+int run(const std::string& args, const Scratch&, std::string* err = nullptr) {
+    const test::CommandResult r = test::runCommand(kExe + " " + args, test::Capture::Stderr);
+    if (err) *err = r.output;
+    return r.code;
 }
 
 /// A particle file like ferro-sim's: a ball of particles and the header comments.
