@@ -1,5 +1,6 @@
 #include "povray/PovExport.hpp"
 
+#include "sim/AtomicFile.hpp"
 #include "sim/MagnetState.hpp"
 #include "sim/ParticleFile.hpp"
 #include "sim/SceneFile.hpp"
@@ -14,7 +15,6 @@
 #include <fstream>
 #include <limits>
 #include <sstream>
-#include <unistd.h>
 
 namespace ferro {
 
@@ -431,23 +431,12 @@ bool writeTextFile(const std::string& path, const std::string& text, bool onlyIf
                 return false;
         }
     }
-    const fs::path target(path);
-    const fs::path tmp = target.parent_path() / ("." + target.filename().string() + ".tmp" + std::to_string(::getpid()));
-    {
-        std::ofstream out(tmp, std::ios::binary | std::ios::trunc);
-        out.write(text.data(), std::streamsize(text.size()));
-        out.close();
-        if (!out) {
-            std::error_code ec;
-            fs::remove(tmp, ec);
-            throw PovExportError("cannot write " + path);
-        }
-    }
-    std::error_code ec;
-    fs::rename(tmp, target, ec);
-    if (ec) {
-        fs::remove(tmp, ec);
-        throw PovExportError("cannot write " + path + ": " + ec.message());
+    try {
+        writeFileAtomically(path, [&](std::ostream& out) { out.write(text.data(), std::streamsize(text.size())); });
+    } catch (const AtomicFileError& e) {
+        if (e.step() == AtomicFileError::Step::Rename)
+            throw PovExportError("cannot write " + path + ": " + std::strerror(e.errorNumber()));
+        throw PovExportError("cannot write " + path);
     }
     return true;
 }

@@ -1,9 +1,11 @@
 // Particle files: binary PLY writer and a tolerant PLY reader (see ParticleFile.hpp).
 #include "sim/ParticleFile.hpp"
 
+#include "sim/AtomicFile.hpp"
+#include "sim/PlyHeader.hpp"
+
 #include <algorithm>
 #include <cctype>
-#include <cerrno>
 #include <charconv>
 #include <cstdio>
 #include <cstring>
@@ -12,21 +14,12 @@
 #include <limits>
 #include <type_traits>
 
-#include <unistd.h>
-
 namespace ferro {
 
 namespace {
 
 [[noreturn]] void fail(const std::string& path, const std::string& reason) {
     throw ParticleFileError(path + ": " + reason);
-}
-
-bool hostIsLittleEndian() {
-    const uint32_t one = 1;
-    unsigned char first = 0;
-    std::memcpy(&first, &one, 1);
-    return first == 1;
 }
 
 bool isSpace(char c) { return std::isspace(static_cast<unsigned char>(c)) != 0; }
@@ -38,19 +31,6 @@ std::string trim(const std::string& s) {
     while (b < e && isSpace(s[b])) ++b;
     while (e > b && isSpace(s[e - 1])) --e;
     return s.substr(b, e - b);
-}
-
-std::vector<std::string> split(const std::string& s) {
-    std::vector<std::string> out;
-    size_t i = 0;
-    while (i < s.size()) {
-        while (i < s.size() && isSpace(s[i])) ++i;
-        size_t j = i;
-        while (j < s.size() && !isSpace(s[j])) ++j;
-        if (j > i) out.push_back(s.substr(i, j - i));
-        i = j;
-    }
-    return out;
 }
 
 /// Locale-independent number parse of a whole (trimmed) string; std::strtod would follow
@@ -67,35 +47,6 @@ bool parseDouble(const std::string& text, double& out) {
 // ---------------------------------------------------------------------------------------
 // Reader
 // ---------------------------------------------------------------------------------------
-
-enum class Scalar { I8, U8, I16, U16, I32, U32, F32, F64 };
-
-bool parseScalar(const std::string& name, Scalar& out) {
-    static const std::pair<const char*, Scalar> table[] = {
-        {"char", Scalar::I8},    {"int8", Scalar::I8},     {"uchar", Scalar::U8},
-        {"uint8", Scalar::U8},   {"short", Scalar::I16},   {"int16", Scalar::I16},
-        {"ushort", Scalar::U16}, {"uint16", Scalar::U16},  {"int", Scalar::I32},
-        {"int32", Scalar::I32},  {"uint", Scalar::U32},    {"uint32", Scalar::U32},
-        {"float", Scalar::F32},  {"float32", Scalar::F32}, {"double", Scalar::F64},
-        {"float64", Scalar::F64},
-    };
-    for (const auto& [n, s] : table)
-        if (name == n) {
-            out = s;
-            return true;
-        }
-    return false;
-}
-
-size_t scalarSize(Scalar s) {
-    switch (s) {
-    case Scalar::I8: case Scalar::U8: return 1;
-    case Scalar::I16: case Scalar::U16: return 2;
-    case Scalar::I32: case Scalar::U32: case Scalar::F32: return 4;
-    case Scalar::F64: return 8;
-    }
-    return 0;
-}
 
 /// double -> float saturating to +-inf: a plain cast of an out-of-range value is undefined.
 float toFloat(double v) {
@@ -116,109 +67,51 @@ float load(const unsigned char* p, bool swap) {
     else return toFloat(static_cast<double>(v));
 }
 
-float loadScalar(Scalar s, const unsigned char* p, bool swap) {
+float loadScalar(PlyScalar s, const unsigned char* p, bool swap) {
     switch (s) {
-    case Scalar::I8: return load<int8_t>(p, swap);
-    case Scalar::U8: return load<uint8_t>(p, swap);
-    case Scalar::I16: return load<int16_t>(p, swap);
-    case Scalar::U16: return load<uint16_t>(p, swap);
-    case Scalar::I32: return load<int32_t>(p, swap);
-    case Scalar::U32: return load<uint32_t>(p, swap);
-    case Scalar::F32: return load<float>(p, swap);
-    case Scalar::F64: return load<double>(p, swap);
+    case PlyScalar::Int8: return load<int8_t>(p, swap);
+    case PlyScalar::UInt8: return load<uint8_t>(p, swap);
+    case PlyScalar::Int16: return load<int16_t>(p, swap);
+    case PlyScalar::UInt16: return load<uint16_t>(p, swap);
+    case PlyScalar::Int32: return load<int32_t>(p, swap);
+    case PlyScalar::UInt32: return load<uint32_t>(p, swap);
+    case PlyScalar::Float32: return load<float>(p, swap);
+    case PlyScalar::Float64: return load<double>(p, swap);
     }
     return 0.0f;
 }
 
-enum class Format { Ascii, BinaryLE, BinaryBE };
-
 struct Header {
-    Format format = Format::Ascii;
+    PlyFormat format = PlyFormat::Ascii;
     uint64_t vertexCount = 0;
-    std::vector<Scalar> types; ///< per vertex property
-    ParticleTable table;       ///< names and comments filled, values empty
+    std::vector<PlyScalar> types; ///< per vertex property
+    ParticleTable table;          ///< names and comments filled, values empty
 };
 
-/// Reads one header line (without '\n' and a trailing '\r'). False at end of file or when
-/// the line is longer than `maxLen`, which keeps a binary file from being read as a line.
-bool readLine(std::istream& in, std::string& line, size_t maxLen) {
-    line.clear();
-    std::streambuf* buf = in.rdbuf();
-    for (;;) {
-        const int c = buf->sbumpc();
-        if (c == std::char_traits<char>::eof()) return false;
-        if (c == '\n') break;
-        if (line.size() >= maxLen) return false;
-        line.push_back(static_cast<char>(c));
-    }
-    if (!line.empty() && line.back() == '\r') line.pop_back();
-    return true;
-}
-
+/// The PLY header with what a particle file needs of it: a first element `vertex` whose
+/// properties are all scalars; later elements are never read.
 Header readHeader(std::istream& in, const std::string& path) {
-    std::string line;
-    if (!readLine(in, line, 16) || trim(line) != "ply") fail(path, "not a PLY file");
+    PlyHeader ply;
+    try {
+        ply = readPlyHeader(in);
+    } catch (const PlyHeaderError& e) {
+        fail(path, e.what());
+    }
+    auto bad = [&](const std::string& why) { fail(path, "bad PLY header: " + why); };
+    if (ply.elements.empty()) bad("no vertex element");
+    const PlyElement& vertex = ply.elements.front();
+    if (vertex.name != "vertex") bad("first element is '" + vertex.name + "', not 'vertex'");
 
     Header h;
-    bool haveFormat = false;
-    int elements = 0;
-    size_t headerBytes = 0;
-    constexpr size_t maxHeaderBytes = 1 << 20;
-    auto bad = [&](const std::string& why) { fail(path, "bad PLY header: " + why); };
-
-    for (;;) {
-        if (!readLine(in, line, maxHeaderBytes)) bad("no end_header");
-        headerBytes += line.size() + 1;
-        if (headerBytes > maxHeaderBytes) bad("longer than 1 MiB");
-        const std::vector<std::string> tok = split(line);
-        if (tok.empty()) continue;
-        const std::string& key = tok[0];
-        if (key == "end_header") break;
-        if (key == "comment") {
-            // "comment key value...": the value keeps its inner spacing.
-            const std::string text = trim(line.substr(line.find("comment") + 7));
-            if (text.empty()) continue;
-            size_t k = 0;
-            while (k < text.size() && !isSpace(text[k])) ++k;
-            h.table.comments.emplace_back(text.substr(0, k), trim(text.substr(k)));
-        } else if (key == "obj_info") {
-            continue;
-        } else if (key == "format") {
-            if (haveFormat) bad("two format lines");
-            if (tok.size() < 2) bad("format line without a format");
-            if (tok[1] == "ascii") h.format = Format::Ascii;
-            else if (tok[1] == "binary_little_endian") h.format = Format::BinaryLE;
-            else if (tok[1] == "binary_big_endian") h.format = Format::BinaryBE;
-            else bad("unknown format '" + tok[1] + "'");
-            haveFormat = true;
-        } else if (key == "element") {
-            if (tok.size() != 3) bad("malformed element line '" + line + "'");
-            ++elements;
-            if (elements == 1) {
-                if (tok[1] != "vertex")
-                    bad("first element is '" + tok[1] + "', not 'vertex'");
-                const std::string& n = tok[2];
-                auto r = std::from_chars(n.data(), n.data() + n.size(), h.vertexCount);
-                if (r.ec != std::errc() || r.ptr != n.data() + n.size())
-                    bad("bad vertex count '" + n + "'");
-            }
-        } else if (key == "property") {
-            if (elements == 0) bad("property before any element");
-            if (elements > 1) continue; // later elements are never read
-            if (tok.size() >= 2 && tok[1] == "list")
-                bad("list property '" + tok.back() + "' in the vertex element");
-            if (tok.size() != 3) bad("malformed property line '" + line + "'");
-            Scalar s;
-            if (!parseScalar(tok[1], s)) bad("unknown property type '" + tok[1] + "'");
-            h.types.push_back(s);
-            h.table.names.push_back(tok[2]);
-        } else {
-            bad("unexpected line '" + line + "'");
-        }
+    h.format = ply.format;
+    h.vertexCount = vertex.count;
+    for (const PlyProperty& p : vertex.properties) {
+        if (p.isList) bad("list property '" + p.name + "' in the vertex element");
+        h.types.push_back(p.type);
+        h.table.names.push_back(p.name);
     }
-    if (!haveFormat) bad("no format line");
-    if (elements == 0) bad("no vertex element");
     if (h.types.empty() && h.vertexCount > 0) bad("vertex element has no properties");
+    h.table.comments = std::move(ply.comments);
     return h;
 }
 
@@ -232,16 +125,16 @@ void readBinary(std::istream& in, const std::string& path, Header& h) {
     const uint64_t available = static_cast<uint64_t>(fileEnd - dataStart);
 
     size_t rowBytes = 0;
-    for (Scalar s : h.types) rowBytes += scalarSize(s);
+    for (PlyScalar s : h.types) rowBytes += plyScalarBytes(s);
     const std::string truncated = "truncated (expected " + std::to_string(h.vertexCount) + " vertices)";
     // Compared before allocating, so a corrupt count cannot trigger a huge allocation.
     if (rowBytes > 0 && h.vertexCount > available / rowBytes) fail(path, truncated);
     const size_t n = static_cast<size_t>(h.vertexCount);
     h.table.values.resize(n * cols);
 
-    const bool swap = (h.format == Format::BinaryLE) != hostIsLittleEndian();
+    const bool swap = (h.format == PlyFormat::BinaryLittleEndian) != hostIsLittleEndian();
     const bool allFloat = std::all_of(h.types.begin(), h.types.end(),
-                                      [](Scalar s) { return s == Scalar::F32; });
+                                      [](PlyScalar s) { return s == PlyScalar::Float32; });
     if (allFloat && !swap) {
         // The common case (Ferro's own files): one read straight into the table.
         in.read(reinterpret_cast<char*>(h.table.values.data()),
@@ -257,7 +150,7 @@ void readBinary(std::istream& in, const std::string& path, Header& h) {
     for (size_t r = 0; r < n; ++r)
         for (size_t c = 0; c < cols; ++c) {
             *out++ = loadScalar(h.types[c], p, swap);
-            p += scalarSize(h.types[c]);
+            p += plyScalarBytes(h.types[c]);
         }
 }
 
@@ -294,12 +187,11 @@ std::string makeHeader(const std::string& path, const ParticleTable& table) {
     if (cols == 0 ? !table.values.empty() : table.values.size() % cols != 0)
         fail(path, std::to_string(table.values.size()) + " values do not fill rows of " +
                        std::to_string(cols) + " columns");
-    std::string header = "ply\nformat binary_little_endian 1.0\n";
-    for (const auto& [key, value] : table.comments) {
-        if (key.empty() || hasSpace(key)) fail(path, "bad comment key '" + key + "'");
-        if (value.find_first_of("\r\n") != std::string::npos)
-            fail(path, "comment '" + key + "' has a line break in its value");
-        header += "comment " + key + (value.empty() ? "" : " " + value) + "\n";
+    std::string header;
+    try {
+        header = binaryPlyHeaderStart(table.comments);
+    } catch (const std::invalid_argument& e) {
+        fail(path, e.what());
     }
     header += "element vertex " + std::to_string(table.rows()) + "\n";
     for (const std::string& name : table.names) {
@@ -308,11 +200,6 @@ std::string makeHeader(const std::string& path, const ParticleTable& table) {
     }
     header += "end_header\n";
     return header;
-}
-
-/// Writes all of `data`; false (errno set) on failure.
-bool writeAll(std::FILE* f, const void* data, size_t bytes) {
-    return bytes == 0 || std::fwrite(data, 1, bytes, f) == bytes;
 }
 
 } // namespace
@@ -370,43 +257,36 @@ std::vector<Vec3> ParticleTable::vec3(const std::string& a, const std::string& b
 
 void writeParticleFile(const std::string& path, const ParticleTable& table) {
     const std::string header = makeHeader(path, table);
-    const std::string tmp = path + ".tmp-" + std::to_string(::getpid());
-    std::FILE* f = std::fopen(tmp.c_str(), "wb");
-    if (!f) fail(path, "cannot create " + tmp + ": " + std::strerror(errno));
-
-    auto abandon = [&](const char* what) {
-        const int err = errno;
-        if (f) std::fclose(f);
-        std::remove(tmp.c_str());
-        fail(path, std::string(what) + ": " + std::strerror(err));
-    };
-    if (!writeAll(f, header.data(), header.size())) abandon("write failed");
     const size_t count = table.values.size();
-    if (hostIsLittleEndian()) {
-        if (!writeAll(f, table.values.data(), count * sizeof(float))) abandon("write failed");
-    } else {
-        // Byte-swap through a bounded buffer rather than a copy of the whole table.
-        std::vector<unsigned char> chunk;
-        constexpr size_t chunkFloats = 1 << 16;
-        for (size_t i = 0; i < count; i += chunkFloats) {
-            const size_t m = std::min(chunkFloats, count - i);
-            chunk.resize(m * sizeof(float));
-            std::memcpy(chunk.data(), table.values.data() + i, chunk.size());
-            for (size_t k = 0; k < m; ++k) std::reverse(&chunk[4 * k], &chunk[4 * k] + 4);
-            if (!writeAll(f, chunk.data(), chunk.size())) abandon("write failed");
-        }
+    try {
+        writeFileAtomically(path, [&](std::ostream& out) {
+            out.write(header.data(), static_cast<std::streamsize>(header.size()));
+            if (hostIsLittleEndian()) {
+                out.write(reinterpret_cast<const char*>(table.values.data()),
+                          static_cast<std::streamsize>(count * sizeof(float)));
+                return;
+            }
+            // Byte-swap through a bounded buffer rather than a copy of the whole table.
+            std::vector<char> chunk;
+            constexpr size_t chunkFloats = 1 << 16;
+            for (size_t i = 0; i < count && out; i += chunkFloats) {
+                const size_t m = std::min(chunkFloats, count - i);
+                chunk.resize(m * sizeof(float));
+                std::memcpy(chunk.data(), table.values.data() + i, chunk.size());
+                for (size_t k = 0; k < m; ++k) std::reverse(&chunk[4 * k], &chunk[4 * k] + 4);
+                out.write(chunk.data(), static_cast<std::streamsize>(chunk.size()));
+            }
+        });
+    } catch (const AtomicFileError& e) {
+        fail(path, e.what());
     }
-    const int closed = std::fclose(f);
-    f = nullptr;
-    if (closed != 0) abandon("write failed");
-    if (std::rename(tmp.c_str(), path.c_str()) != 0) abandon("cannot rename the temporary file");
 }
 
 ParticleTable readParticleFile(const std::string& path) {
     std::ifstream in(path, std::ios::binary);
     if (!in) fail(path, "cannot open");
     Header h = readHeader(in, path);
-    if (h.format == Format::Ascii) readAscii(in, path, h);
+    if (h.format == PlyFormat::Ascii) readAscii(in, path, h);
     else readBinary(in, path, h);
     return std::move(h.table);
 }

@@ -3,6 +3,8 @@
 
 #include "surface/DensityKernels.hpp"
 
+#include "sim/AtomicFile.hpp"
+
 #include <openvdb/openvdb.h>
 #include <openvdb/tools/FastSweeping.h>
 #include <openvdb/tools/Filter.h>
@@ -23,10 +25,7 @@
 #include <algorithm>
 #include <atomic>
 #include <cmath>
-#include <cstdio>
 #include <mutex>
-
-#include <unistd.h>
 
 namespace ferro {
 
@@ -295,18 +294,18 @@ void writeLevelSet(const std::string& path, const TriangleMesh& mesh, double vox
     FloatGrid::Ptr sdf = openvdb::tools::meshToLevelSet<FloatGrid>(*xform, points, tris, 3.0f);
     sdf->setName("surface");
     sdf->setGridClass(openvdb::GRID_LEVEL_SET);
-    const std::string tmp = path + ".tmp-" + std::to_string(::getpid());
     try {
-        openvdb::io::File file(tmp);
-        openvdb::GridPtrVec grids{sdf};
-        file.write(grids);
-        file.close();
-    } catch (const std::exception& e) {
-        std::remove(tmp.c_str());
-        throw MeshFileError(path + ": cannot write the level set: " + e.what());
-    }
-    if (std::rename(tmp.c_str(), path.c_str()) != 0) {
-        std::remove(tmp.c_str());
+        writeFileAtomicallyByPath(path, [&](const std::string& tmp) {
+            try {
+                openvdb::io::File file(tmp);
+                openvdb::GridPtrVec grids{sdf};
+                file.write(grids);
+                file.close();
+            } catch (const std::exception& e) {
+                throw MeshFileError(path + ": cannot write the level set: " + e.what());
+            }
+        });
+    } catch (const AtomicFileError&) {
         throw MeshFileError(path + ": cannot rename the temporary file");
     }
 }

@@ -2,6 +2,9 @@
 // (see TriangleMesh.hpp).
 #include "surface/TriangleMesh.hpp"
 
+#include "sim/AtomicFile.hpp"
+#include "sim/PlyHeader.hpp"
+
 #include <assimp/Exporter.hpp>
 #include <assimp/Importer.hpp>
 #include <assimp/postprocess.h>
@@ -11,14 +14,11 @@
 #include <algorithm>
 #include <cctype>
 #include <cerrno>
-#include <charconv>
 #include <cmath>
 #include <cstdio>
 #include <cstring>
 #include <fstream>
 #include <memory>
-
-#include <unistd.h>
 
 namespace ferro {
 
@@ -26,35 +26,6 @@ namespace {
 
 [[noreturn]] void fail(const std::string& path, const std::string& reason) {
     throw MeshFileError(path + ": " + reason);
-}
-
-bool hostIsLittleEndian() {
-    const uint32_t one = 1;
-    unsigned char first = 0;
-    std::memcpy(&first, &one, 1);
-    return first == 1;
-}
-
-bool isSpace(char c) { return std::isspace(static_cast<unsigned char>(c)) != 0; }
-
-std::string trim(const std::string& s) {
-    size_t b = 0, e = s.size();
-    while (b < e && isSpace(s[b])) ++b;
-    while (e > b && isSpace(s[e - 1])) --e;
-    return s.substr(b, e - b);
-}
-
-std::vector<std::string> split(const std::string& s) {
-    std::vector<std::string> out;
-    size_t i = 0;
-    while (i < s.size()) {
-        while (i < s.size() && isSpace(s[i])) ++i;
-        size_t j = i;
-        while (j < s.size() && !isSpace(s[j])) ++j;
-        if (j > i) out.push_back(s.substr(i, j - i));
-        i = j;
-    }
-    return out;
 }
 
 std::string lower(std::string s) {
@@ -79,24 +50,17 @@ void checkIndices(const std::string& path, const TriangleMesh& mesh) {
                                std::to_string(n) + " vertices)");
 }
 
-/// Writes `bytes` to `path` atomically: a temporary file in the same directory, renamed
-/// over the target only once complete, so readers never see a half-written mesh.
-void writeFileAtomically(const std::string& path, const std::vector<std::pair<const void*, size_t>>& parts) {
-    const std::string tmp = path + ".tmp-" + std::to_string(::getpid());
-    std::FILE* f = std::fopen(tmp.c_str(), "wb");
-    if (!f) fail(path, "cannot create " + tmp + ": " + std::strerror(errno));
-    auto abandon = [&](const char* what) {
-        const int err = errno;
-        if (f) std::fclose(f);
-        std::remove(tmp.c_str());
-        fail(path, std::string(what) + ": " + std::strerror(err));
-    };
-    for (const auto& [data, size] : parts)
-        if (size > 0 && std::fwrite(data, 1, size, f) != size) abandon("write failed");
-    const int closed = std::fclose(f);
-    f = nullptr;
-    if (closed != 0) abandon("write failed");
-    if (std::rename(tmp.c_str(), path.c_str()) != 0) abandon("cannot rename the temporary file");
+/// Writes the byte ranges `parts` one after another to `path` atomically (see
+/// sim/AtomicFile.hpp), so readers never see a half-written mesh.
+void writeParts(const std::string& path, const std::vector<std::pair<const void*, size_t>>& parts) {
+    try {
+        writeFileAtomically(path, [&](std::ostream& out) {
+            for (const auto& [data, size] : parts)
+                out.write(static_cast<const char*>(data), static_cast<std::streamsize>(size));
+        });
+    } catch (const AtomicFileError& e) {
+        fail(path, e.what());
+    }
 }
 
 // ---------------------------------------------------------------------------------------
@@ -109,13 +73,11 @@ void writePly(const std::string& path, const TriangleMesh& mesh) {
     if (withNormals && mesh.normals.size() != mesh.vertices.size())
         fail(path, std::to_string(mesh.normals.size()) + " normals for " +
                        std::to_string(mesh.vertices.size()) + " vertices");
-    std::string header = "ply\nformat binary_little_endian 1.0\n";
-    for (const auto& [key, value] : mesh.comments) {
-        if (key.empty() || std::any_of(key.begin(), key.end(), isSpace))
-            fail(path, "bad comment key '" + key + "'");
-        if (value.find_first_of("\r\n") != std::string::npos)
-            fail(path, "comment '" + key + "' has a line break in its value");
-        header += "comment " + key + (value.empty() ? "" : " " + value) + "\n";
+    std::string header;
+    try {
+        header = binaryPlyHeaderStart(mesh.comments);
+    } catch (const std::invalid_argument& e) {
+        fail(path, e.what());
     }
     header += "element vertex " + std::to_string(mesh.vertices.size()) + "\n";
     header += "property float x\nproperty float y\nproperty float z\n";
@@ -138,65 +100,9 @@ void writePly(const std::string& path, const TriangleMesh& mesh) {
         p[0] = 3;
         std::memcpy(p + 1, mesh.triangles[t].data(), 3 * sizeof(uint32_t));
     }
-    writeFileAtomically(path, {{header.data(), header.size()},
-                               {vertexData.data(), vertexData.size() * sizeof(float)},
-                               {faceData.data(), faceData.size()}});
-}
-
-/// What a PLY header says, as far as our reader needs it.
-struct PlyHeader {
-    bool binaryLE = false;
-    std::vector<std::pair<std::string, std::string>> comments;
-    struct Element {
-        std::string name;
-        uint64_t count = 0;
-        std::vector<std::vector<std::string>> properties; ///< tokens after "property"
-    };
-    std::vector<Element> elements;
-    size_t dataOffset = 0;
-};
-
-/// Parses the header of a PLY file; false when it is not one (then assimp gets to try).
-bool readPlyHeader(std::istream& in, PlyHeader& h) {
-    std::string line;
-    size_t bytes = 0;
-    constexpr size_t maxHeaderBytes = 1 << 20;
-    bool first = true;
-    while (std::getline(in, line)) {
-        bytes += line.size() + 1;
-        if (bytes > maxHeaderBytes) return false;
-        if (!line.empty() && line.back() == '\r') line.pop_back();
-        if (first) {
-            if (trim(line) != "ply") return false;
-            first = false;
-            continue;
-        }
-        const std::vector<std::string> tok = split(line);
-        if (tok.empty()) continue;
-        if (tok[0] == "end_header") {
-            h.dataOffset = bytes;
-            return true;
-        }
-        if (tok[0] == "comment") {
-            const std::string text = trim(line.substr(line.find("comment") + 7));
-            if (text.empty()) continue;
-            size_t k = 0;
-            while (k < text.size() && !isSpace(text[k])) ++k;
-            h.comments.emplace_back(text.substr(0, k), trim(text.substr(k)));
-        } else if (tok[0] == "format") {
-            h.binaryLE = tok.size() >= 2 && tok[1] == "binary_little_endian";
-        } else if (tok[0] == "element" && tok.size() == 3) {
-            PlyHeader::Element e;
-            e.name = tok[1];
-            const std::string& n = tok[2];
-            auto r = std::from_chars(n.data(), n.data() + n.size(), e.count);
-            if (r.ec != std::errc() || r.ptr != n.data() + n.size()) return false;
-            h.elements.push_back(std::move(e));
-        } else if (tok[0] == "property" && !h.elements.empty()) {
-            h.elements.back().properties.emplace_back(tok.begin() + 1, tok.end());
-        }
-    }
-    return false;
+    writeParts(path, {{header.data(), header.size()},
+                      {vertexData.data(), vertexData.size() * sizeof(float)},
+                      {faceData.data(), faceData.size()}});
 }
 
 /// Every element item with properties takes at least one byte (binary) or two characters
@@ -206,7 +112,6 @@ void checkPlyCounts(const std::string& path, const PlyHeader& h, std::istream& i
     in.seekg(0, std::ios::end);
     const auto end = in.tellg();
     if (end < 0 || !in) fail(path, "cannot determine the file size");
-    if (static_cast<uint64_t>(end) < h.dataOffset) fail(path, "truncated (the header ends without a line break)");
     const uint64_t available = static_cast<uint64_t>(end) - h.dataOffset;
     uint64_t items = 0;
     for (const auto& e : h.elements) {
@@ -222,35 +127,33 @@ void checkPlyCounts(const std::string& path, const PlyHeader& h, std::istream& i
 /// vertex properties and a uchar/uint face list): one read, no assimp scene.
 /// False when the file has another layout; throws when it has ours but is broken.
 bool readOwnPly(const std::string& path, const PlyHeader& h, std::istream& in, TriangleMesh& mesh) {
-    if (!h.binaryLE || h.elements.size() != 2) return false;
+    if (h.format != PlyFormat::BinaryLittleEndian || h.elements.size() != 2) return false;
     const auto& ve = h.elements[0];
     const auto& fe = h.elements[1];
     if (ve.name != "vertex" || fe.name != "face") return false;
     int ix = -1, iy = -1, iz = -1, inx = -1, iny = -1, inz = -1;
     for (size_t i = 0; i < ve.properties.size(); ++i) {
-        const auto& p = ve.properties[i];
-        if (p.size() != 2 || (p[0] != "float" && p[0] != "float32")) return false;
+        const PlyProperty& p = ve.properties[i];
+        if (p.isList || p.type != PlyScalar::Float32) return false;
         const int k = static_cast<int>(i);
-        if (p[1] == "x") ix = k;
-        else if (p[1] == "y") iy = k;
-        else if (p[1] == "z") iz = k;
-        else if (p[1] == "nx") inx = k;
-        else if (p[1] == "ny") iny = k;
-        else if (p[1] == "nz") inz = k;
+        if (p.name == "x") ix = k;
+        else if (p.name == "y") iy = k;
+        else if (p.name == "z") iz = k;
+        else if (p.name == "nx") inx = k;
+        else if (p.name == "ny") iny = k;
+        else if (p.name == "nz") inz = k;
     }
     if (ix < 0 || iy < 0 || iz < 0) return false;
     if (fe.properties.size() != 1) return false;
-    const auto& fp = fe.properties[0];
-    if (fp.size() != 4 || fp[0] != "list" || (fp[1] != "uchar" && fp[1] != "uint8") ||
-        (fp[2] != "uint" && fp[2] != "uint32" && fp[2] != "int" && fp[2] != "int32"))
+    const PlyProperty& fp = fe.properties[0];
+    if (!fp.isList || fp.countType != PlyScalar::UInt8 ||
+        (fp.type != PlyScalar::UInt32 && fp.type != PlyScalar::Int32))
         return false;
     if (!hostIsLittleEndian()) return false;
 
     in.seekg(0, std::ios::end);
     const auto end = in.tellg();
     if (end < 0 || !in) fail(path, "cannot determine the file size");
-    // `end_header` without its line break counts one byte past the end of the file.
-    if (static_cast<uint64_t>(end) < h.dataOffset) fail(path, "truncated (the header ends without a line break)");
     in.seekg(static_cast<std::streamoff>(h.dataOffset));
     if (!in) fail(path, "cannot seek to the data");
     const uint64_t available = static_cast<uint64_t>(end) - h.dataOffset;
@@ -355,7 +258,7 @@ void writeWithAssimp(const std::string& path, const TriangleMesh& mesh, const st
     // Exported to memory and written by us, so the file appears atomically.
     const aiExportDataBlob* blob = exporter.ExportToBlob(scene.get(), id);
     if (!blob) fail(path, "assimp export as '" + id + "' failed: " + exporter.GetErrorString());
-    writeFileAtomically(path, {{blob->data, blob->size}});
+    writeParts(path, {{blob->data, blob->size}});
 }
 
 TriangleMesh readWithAssimp(const std::string& path) {
@@ -410,8 +313,17 @@ void writeMesh(const std::string& path, const TriangleMesh& mesh, const std::str
 TriangleMesh readMesh(const std::string& path) {
     std::ifstream in(path, std::ios::binary);
     if (!in) fail(path, std::string("cannot open: ") + std::strerror(errno));
+    // A PLY header is read by us (comments, count checks); any other format goes to assimp.
     PlyHeader header;
-    const bool isPly = readPlyHeader(in, header);
+    bool isPly = true;
+    try {
+        header = readPlyHeader(in);
+    } catch (const PlyHeaderError& e) {
+        if (e.kind() == PlyHeaderError::Kind::EndWithoutLineBreak)
+            fail(path, "truncated (the header ends without a line break)");
+        if (e.kind() == PlyHeaderError::Kind::Malformed) fail(path, e.what());
+        isPly = false;
+    }
     if (isPly) {
         in.clear();
         checkPlyCounts(path, header, in);
