@@ -187,14 +187,14 @@ void FluidMagnetics::computeKelvin(const std::vector<Vec3>& x, const NeighborLis
     kelvin_.resize(n);
     const Real scale = Real(kMu0 / rho0_);
     const Real V = Real(volume_);
-    const bool pairs = law_.inducedForce && nbr.offset.size() == n + 1;
+    const bool pairs = law_.inducedForce && nbr.count.size() == n && nbr.hasGradients();
     forEachParticle(n, [&](size_t i) {
         // grad H = analytic Jacobian of the magnets (+ SPH difference gradient of the
         // induced field with magnetization.induced_force).
         Eigen::Matrix3f J = fieldGradient(magnets_, x[i].cast<double>()).cast<Real>();
         const Vec3 hi = Hind_[i];
         if (pairs)
-            for (uint32_t k = nbr.offset[i]; k < nbr.offset[i + 1]; ++k)
+            for (uint32_t k = nbr.begin(i); k < nbr.end(i); ++k)
                 J += (Real(inducedScale_) * V * (Hind_[nbr.index[k]] - hi)) * nbr.gradW[k].transpose();
         kelvin_[i] = scale * (J * M_[i]);
     });

@@ -40,6 +40,12 @@ constexpr uint32_t kDenseNeighborhood = 20;
 /// near-wall layer carries extra pressure instead, and the interior is hydrostatic.
 constexpr Real kWallMirror = 1;
 
+/// Verlet skin of the WCSPH neighbour search, as a fraction of the kernel support: the
+/// search keeps every pair within (1 + skin) h and is repeated only when two particles
+/// may have closed the skin. A WCSPH step moves particles a few hundredths of a spacing,
+/// so a search lasts many steps; DFSPH's steps are ten times longer and search every step.
+constexpr double kNeighborSkin = 0.2;
+
 std::string fmtVec(const Vec3d& p) {
     std::ostringstream s;
     s.precision(5);
@@ -307,14 +313,38 @@ FluidSimulation::FluidSimulation(const SimScene& scene)
 
     if (!scene_.magnets.empty()) magnetics_ = std::make_unique<FluidMagnetics>(scene_, volume_, spacing_);
 
-    sortAndSearch();
+    // DFSPH sweeps the lists a dozen times a step and keeps each pair's kernel gradient;
+    // so does the induced Kelvin force. WCSPH sweeps them once and takes small steps, so
+    // it evaluates the kernel in its sweep and searches only when the skin is used up.
+    storeGradients_ = scene_.solver.kind == SolverParams::Kind::DFSPH || scene_.magnetization.inducedForce;
+    skin_ = scene_.solver.kind == SolverParams::Kind::WCSPH ? kNeighborSkin * h_ : 0.0;
+
+    refreshNeighbors(true);
     // The field of the initial state, so that frame 0 carries H and M too.
     if (magnetics_) magnetics_->update(time_, x_, fluidNbr_, true);
 }
 
 FluidSimulation::~FluidSimulation() = default;
 
-void FluidSimulation::sortAndSearch() {
+void FluidSimulation::refreshNeighbors(bool forceSearch) {
+    // A new search only when some pair may have closed the skin: two particles that each
+    // moved less than half the skin since the search are still in each other's slots.
+    bool search = forceSearch || skin_ <= 0 || xSearch_.size() != x_.size();
+    if (!search) {
+        const Real moved2 = tbb::parallel_reduce(
+            tbb::blocked_range<size_t>(0, x_.size(), 4096), Real(0),
+            [&](const tbb::blocked_range<size_t>& r, Real m) {
+                for (size_t i = r.begin(); i != r.end(); ++i) m = std::max(m, (x_[i] - xSearch_[i]).squaredNorm());
+                return m;
+            },
+            [](Real a, Real b) { return std::max(a, b); });
+        search = !(4 * double(moved2) < skin_ * skin_);   // also true for NaN
+    }
+    if (search) searchCandidates();
+    updateNeighbors();
+}
+
+void FluidSimulation::searchCandidates() {
     const size_t n = x_.size();
     grid_.sort(x_, id_, Real(h_), order_);
     permute(x_, order_);
@@ -325,12 +355,16 @@ void FluidSimulation::sortAndSearch() {
     if (magnetics_) magnetics_->permute(order_);
     grid_.index(x_, grid_.geometry());
     splitCoordinates(x_, px_, py_, pz_);
+    xSearch_ = x_;
+    searchStep_ = steps_;
+    ++stats_.searches;
 
     const bool haveBoundary = !bx_.empty();
+    const Real radius = Real(h_ + skin_);
 
-    // Pass 1: fluid and boundary neighbours into fixed-capacity scratch lists. The
-    // candidate buffer is generous (every candidate is written before it is tested);
-    // only the neighbours found are kept, and the capacity grows if one overflows.
+    // Candidates within the support plus the skin, into fixed-capacity scratch lists. The
+    // candidate buffer is generous (every candidate is written before it is tested); only
+    // the hits are kept, and the capacity grows if one overflows.
     std::vector<uint32_t> fluidCount(n), boundaryCount(n);
     constexpr uint32_t kRoom = 4096;
     for (;;) {
@@ -340,14 +374,14 @@ void FluidSimulation::sortAndSearch() {
         tbb::parallel_for(tbb::blocked_range<size_t>(0, n, kGrain), [&](const tbb::blocked_range<size_t>& r) {
             std::vector<uint32_t> buffer(kRoom + 1);
             for (size_t i = r.begin(); i != r.end(); ++i) {
-                uint32_t cnt = gatherNeighbors(grid_, px_.data(), py_.data(), pz_.data(), x_[i], Real(h_),
+                uint32_t cnt = gatherNeighbors(grid_, px_.data(), py_.data(), pz_.data(), x_[i], radius,
                                                uint32_t(i), buffer.data(), kRoom);
                 if (cnt > capacity_) overflow = true;
                 std::copy_n(buffer.data(), std::min<uint32_t>(cnt, uint32_t(capacity_)), &scratch_[i * capacity_]);
                 fluidCount[i] = cnt;
                 cnt = 0;
                 if (haveBoundary) {
-                    cnt = gatherNeighbors(bGrid_, bpx_.data(), bpy_.data(), bpz_.data(), x_[i], Real(h_),
+                    cnt = gatherNeighbors(bGrid_, bpx_.data(), bpy_.data(), bpz_.data(), x_[i], radius,
                                           uint32_t(-1), buffer.data(), kRoom);
                     if (cnt > bCapacity_) overflow = true;
                     std::copy_n(buffer.data(), std::min<uint32_t>(cnt, uint32_t(bCapacity_)), &bScratch_[i * bCapacity_]);
@@ -362,45 +396,108 @@ void FluidSimulation::sortAndSearch() {
             if (boundaryCount[i] > bCapacity_) bCapacity_ = std::min<size_t>(boundaryCount[i] + 16, kRoom);
         }
     }
-    auto prefix = [&](const std::vector<uint32_t>& count, NeighborLists& lists) {
+    // One slot per candidate; the candidates themselves are kept for the steps until the
+    // next search.
+    auto slots = [&](const std::vector<uint32_t>& count, const std::vector<uint32_t>& scratch, size_t capacity,
+                     NeighborLists& lists, std::vector<uint32_t>& candidates) {
         lists.offset.resize(n + 1);
         lists.offset[0] = 0;
         for (size_t i = 0; i < n; ++i) lists.offset[i + 1] = lists.offset[i] + count[i];
-        const size_t pairs = lists.offset[n];
-        lists.index.resize(pairs);
-        lists.gradW.resize(pairs);
+        const size_t total = lists.offset[n];
+        candidates.resize(total);
+        lists.index.resize(total);
+        lists.count.resize(n);
+        if (storeGradients_) lists.gradW.resize(total);
+        else lists.gradW.clear();
+        forEachParticle(n, [&](size_t i) { std::copy_n(&scratch[i * capacity], count[i], &candidates[lists.offset[i]]); });
     };
-    prefix(fluidCount, fluidNbr_);
-    prefix(boundaryCount, boundaryNbr_);
+    slots(fluidCount, scratch_, capacity_, fluidNbr_, fluidCandidates_);
+    slots(boundaryCount, bScratch_, bCapacity_, boundaryNbr_, boundaryCandidates_);
+    stats_.candidatePairs = fluidCandidates_.size();
+}
 
-    // Pass 2: compact, store grad W per pair, and sum the density.
+void FluidSimulation::updateNeighbors() {
+    // The neighbours of this step among the candidates (closer than the support), with
+    // each pair's kernel gradient when the solver keeps them, and the density.
+    const size_t n = x_.size();
     rho_.resize(n);
     const Real V = Real(volume_);
-    // Copies particle i's list from `scratch` into `lists` with each pair's kernel
-    // gradient; returns sum_j volume(j) W_ij.
-    auto compact = [&](size_t i, NeighborLists& lists, const uint32_t* scratch, const std::vector<Vec3>& pts,
-                       auto&& volume) {
+    const Real h2 = Real(h_ * h_);
+    const bool storeGradients = storeGradients_;
+#if defined(__SSE2__)
+    const CubicSplineKernel4 kernel4(kernel_);
+#endif
+    // Compacts particle i's candidates in `lists` (points at qx, qy, qz) to its neighbours;
+    // returns sum_j V_j W_ij with V_j = volume[j], or V when volume is null. Branch-free:
+    // every candidate is written to the next free slot, which advances only for a
+    // neighbour (about 55 % are), and a candidate beyond the support adds W = 0.
+    auto compact = [&](size_t i, NeighborLists& lists, const std::vector<uint32_t>& candidates, const Real* qx,
+                       const Real* qy, const Real* qz, const Real* volume) {
         const Vec3 xi = x_[i];
-        const uint32_t o = lists.offset[i], cnt = lists.offset[i + 1] - o;
+        const uint32_t o = lists.offset[i], slots = lists.offset[i + 1] - o;
+        const uint32_t* cand = candidates.data() + o;
+        uint32_t* out = lists.index.data() + o;
+        Vec3* grad = storeGradients ? lists.gradW.data() + o : nullptr;
+        uint32_t cnt = 0, k = 0;
         Real sum = 0;
-        for (uint32_t k = 0; k < cnt; ++k) {
-            const uint32_t j = scratch[k];
-            const Vec3 d = xi - pts[j];
-            lists.index[o + k] = j;
-            Real w;
-            kernel_.evaluate(d, d.squaredNorm(), w, lists.gradW[o + k]);
-            sum += volume(j) * w;
+#if defined(__SSE2__)
+        const __m128 xi4 = _mm_set1_ps(xi.x()), yi4 = _mm_set1_ps(xi.y()), zi4 = _mm_set1_ps(xi.z());
+        const __m128 h24 = _mm_set1_ps(h2);
+        __m128 sum4 = _mm_setzero_ps();
+        for (; k + 4 <= slots; k += 4) {
+            const uint32_t* c = cand + k;
+            const __m128 dx = _mm_sub_ps(xi4, _mm_set_ps(qx[c[3]], qx[c[2]], qx[c[1]], qx[c[0]]));
+            const __m128 dy = _mm_sub_ps(yi4, _mm_set_ps(qy[c[3]], qy[c[2]], qy[c[1]], qy[c[0]]));
+            const __m128 dz = _mm_sub_ps(zi4, _mm_set_ps(qz[c[3]], qz[c[2]], qz[c[1]], qz[c[0]]));
+            const __m128 r2 = _mm_add_ps(_mm_add_ps(_mm_mul_ps(dx, dx), _mm_mul_ps(dy, dy)), _mm_mul_ps(dz, dz));
+            const __m128 r = _mm_sqrt_ps(r2);
+            const __m128 vol = volume ? _mm_set_ps(volume[c[3]], volume[c[2]], volume[c[1]], volume[c[0]]) : _mm_set1_ps(V);
+            sum4 = _mm_add_ps(sum4, _mm_mul_ps(vol, kernel4.W(r)));
+            const int hit = _mm_movemask_ps(_mm_cmplt_ps(r2, h24));
+            if (grad) {
+                const __m128 sc = kernel4.gradFactor(r);
+                alignas(16) float gx[4], gy[4], gz[4];
+                _mm_store_ps(gx, _mm_mul_ps(sc, dx));
+                _mm_store_ps(gy, _mm_mul_ps(sc, dy));
+                _mm_store_ps(gz, _mm_mul_ps(sc, dz));
+                for (int l = 0; l < 4; ++l) {
+                    out[cnt] = c[l];
+                    grad[cnt] = Vec3(gx[l], gy[l], gz[l]);
+                    cnt += uint32_t(hit >> l) & 1u;
+                }
+            } else {
+                for (int l = 0; l < 4; ++l) {
+                    out[cnt] = c[l];
+                    cnt += uint32_t(hit >> l) & 1u;
+                }
+            }
         }
+        sum = horizontalSum(sum4);
+#endif
+        for (; k < slots; ++k) {
+            const uint32_t j = cand[k];
+            const Vec3 d(xi.x() - qx[j], xi.y() - qy[j], xi.z() - qz[j]);
+            const Real r2 = d.squaredNorm();
+            out[cnt] = j;
+            Real w;
+            if (grad) kernel_.evaluate(d, r2, w, grad[cnt]);
+            else w = kernel_.WBlended(r2);
+            sum += (volume ? volume[j] : V) * w;
+            cnt += uint32_t(r2 < h2);
+        }
+        lists.count[i] = cnt;
         return sum;
     };
     forEachParticle(n, [&](size_t i) {
         const Real density = V * kernel_.W0() +
-                             compact(i, fluidNbr_, &scratch_[i * capacity_], x_, [&](uint32_t) { return V; }) +
-                             compact(i, boundaryNbr_, &bScratch_[i * bCapacity_], bx_,
-                                     [&](uint32_t b) { return bVolume_[b]; });
+                             compact(i, fluidNbr_, fluidCandidates_, px_.data(), py_.data(), pz_.data(), nullptr) +
+                             compact(i, boundaryNbr_, boundaryCandidates_, bpx_.data(), bpy_.data(), bpz_.data(),
+                                     bVolume_.data());
         rho_[i] = Real(rho0_) * density;
     });
-    stats_.neighborPairs = fluidNbr_.pairs();
+    size_t pairs = 0;
+    for (uint32_t c : fluidNbr_.count) pairs += c;
+    stats_.neighborPairs = pairs;
 }
 
 void FluidSimulation::computeFactors() {
@@ -413,12 +510,12 @@ void FluidSimulation::computeFactors() {
         // (g_f + g_b) . (g_f + kWallMirror g_b) + sum_j |V grad W_ij|^2.
         Vec3 fluid = Vec3::Zero(), wall = Vec3::Zero();
         Real sum2 = 0;
-        for (uint32_t k = fluidNbr_.offset[i]; k < fluidNbr_.offset[i + 1]; ++k) {
+        for (uint32_t k = fluidNbr_.begin(i); k < fluidNbr_.end(i); ++k) {
             const Vec3 g = V * fluidNbr_.gradW[k];
             fluid += g;
             sum2 += g.squaredNorm();
         }
-        for (uint32_t k = boundaryNbr_.offset[i]; k < boundaryNbr_.offset[i + 1]; ++k)
+        for (uint32_t k = boundaryNbr_.begin(i); k < boundaryNbr_.end(i); ++k)
             wall += bVolume_[boundaryNbr_.index[k]] * boundaryNbr_.gradW[k];
         const Real denom = (fluid + wall).dot(fluid + kWallMirror * wall) + sum2;
         alpha_[i] = denom > Real(1e-6) * Real(1 / (h_ * h_)) ? 1 / denom : 0;
@@ -458,57 +555,177 @@ double FluidSimulation::chooseTimeStep(double dtLimit) const {
     return dt;
 }
 
-void FluidSimulation::nonPressureAccelerations(double dt) {
+template <bool kStoredGradients>
+void FluidSimulation::accelerationSweep(const Real* pOverRho2) {
     const size_t n = x_.size();
     const Vec3 g = scene_.solver.gravity.cast<Real>();
     const Real V = Real(volume_);
     const Real rho0 = Real(rho0_);
+    const Real m = Real(mass_);
     const Real nu = Real(viscosity_);
     const Real nuWall = Real(scene_.fluid.viscosity * scene_.container.wallFriction);
     const Real eps2 = Real(0.01 * h_ * h_);
     const bool tension = gamma_ > 0;
+    const bool pressure = pOverRho2 != nullptr;
+    // grad_i W of slot k of particle i, at offset xij with |xij|^2 = r2: stored by the
+    // search (DFSPH) or evaluated here (WCSPH sweeps each list once a step).
+    auto gradient = [&](const NeighborLists& lists, uint32_t k, const Vec3& xij, Real r2) -> Vec3 {
+        if constexpr (kStoredGradients) return lists.gradW[k];
+        else return kernel_.gradWBlended(xij, std::sqrt(r2));
+    };
     if (tension) {
         // Akinci 2013 surface normals n_i = h sum_j (m / rho_j) grad W_ij.
         normal_.resize(n);
+#if defined(__SSE2__)
+        const CubicSplineKernel4 kernel4(kernel_);
+#endif
         forEachParticle(n, [&](size_t i) {
             Vec3 sum = Vec3::Zero();
-            for (uint32_t k = fluidNbr_.offset[i]; k < fluidNbr_.offset[i + 1]; ++k)
-                sum += (rho0 / rho_[fluidNbr_.index[k]]) * fluidNbr_.gradW[k];
+            uint32_t k = fluidNbr_.begin(i);
+            const uint32_t end = fluidNbr_.end(i);
+#if defined(__SSE2__)
+            if constexpr (!kStoredGradients) {
+                const __m128 xi4 = _mm_set1_ps(x_[i].x()), yi4 = _mm_set1_ps(x_[i].y()), zi4 = _mm_set1_ps(x_[i].z());
+                const __m128 rho04 = _mm_set1_ps(rho0);
+                __m128 sx = _mm_setzero_ps(), sy = _mm_setzero_ps(), sz = _mm_setzero_ps();
+                for (; k + 4 <= end; k += 4) {
+                    const uint32_t* j = &fluidNbr_.index[k];
+                    const __m128 dx = _mm_sub_ps(xi4, _mm_set_ps(px_[j[3]], px_[j[2]], px_[j[1]], px_[j[0]]));
+                    const __m128 dy = _mm_sub_ps(yi4, _mm_set_ps(py_[j[3]], py_[j[2]], py_[j[1]], py_[j[0]]));
+                    const __m128 dz = _mm_sub_ps(zi4, _mm_set_ps(pz_[j[3]], pz_[j[2]], pz_[j[1]], pz_[j[0]]));
+                    const __m128 r2 = _mm_add_ps(_mm_add_ps(_mm_mul_ps(dx, dx), _mm_mul_ps(dy, dy)), _mm_mul_ps(dz, dz));
+                    const __m128 rhoj = _mm_set_ps(rho_[j[3]], rho_[j[2]], rho_[j[1]], rho_[j[0]]);
+                    const __m128 f = _mm_mul_ps(_mm_div_ps(rho04, rhoj), kernel4.gradFactor(_mm_sqrt_ps(r2)));
+                    sx = _mm_add_ps(sx, _mm_mul_ps(f, dx));
+                    sy = _mm_add_ps(sy, _mm_mul_ps(f, dy));
+                    sz = _mm_add_ps(sz, _mm_mul_ps(f, dz));
+                }
+                sum = Vec3(horizontalSum(sx), horizontalSum(sy), horizontalSum(sz));
+            }
+#endif
+            for (; k < end; ++k) {
+                const uint32_t j = fluidNbr_.index[k];
+                const Vec3 xij = x_[i] - x_[j];
+                sum += (rho0 / rho_[j]) * gradient(fluidNbr_, k, xij, xij.squaredNorm());
+            }
             normal_[i] = Real(h_) * V * sum;
         });
     }
     const Real gamma = Real(gamma_);
+#if defined(__SSE2__)
+    const CubicSplineKernel4 kernel4(kernel_);
+    const CohesionKernel4 cohesion4(cohesion_);
+#endif
     forEachParticle(n, [&](size_t i) {
         Vec3 acc = g;
         const Vec3 xi = x_[i], vi = v_[i];
-        for (uint32_t k = fluidNbr_.offset[i]; k < fluidNbr_.offset[i + 1]; ++k) {
+        const Real rhoi = rho_[i];
+        const Real pi = pressure ? pOverRho2[i] : 0;
+        // Pressure and viscosity both act along grad W_ij, with one scalar per pair:
+        // the WCSPH pressure -m (p_i / rho_i^2 + p_j / rho_j^2), symmetric in i and j, and
+        // the viscosity of Monaghan / SPlisHSPlasH, 10 nu V_ij (v_ij . x_ij) / (r^2 + eps^2)
+        // with the pair volume V_ij = m / rho_ij at the mean density, symmetric too, so the
+        // pair forces cancel exactly and momentum is conserved.
+        const Real viscosityScale = 10 * nu * 2 * V * rho0;
+        uint32_t k = fluidNbr_.begin(i);
+        const uint32_t end = fluidNbr_.end(i);
+#if defined(__SSE2__)
+        if constexpr (!kStoredGradients) {
+            // Four pairs at a time; the kernel gradient is evaluated here, not loaded.
+            const __m128 xi4 = _mm_set1_ps(xi.x()), yi4 = _mm_set1_ps(xi.y()), zi4 = _mm_set1_ps(xi.z());
+            const __m128 vx4 = _mm_set1_ps(vi.x()), vy4 = _mm_set1_ps(vi.y()), vz4 = _mm_set1_ps(vi.z());
+            const __m128 rhoi4 = _mm_set1_ps(rhoi), pm4 = _mm_set1_ps(pi), m4 = _mm_set1_ps(m);
+            const __m128 visc4 = _mm_set1_ps(viscosityScale), eps4 = _mm_set1_ps(eps2);
+            __m128 ax = _mm_setzero_ps(), ay = _mm_setzero_ps(), az = _mm_setzero_ps();
+            __m128 tx = _mm_setzero_ps(), ty = _mm_setzero_ps(), tz = _mm_setzero_ps(), gKsum = _mm_setzero_ps();
+            const __m128 gammaK4 = _mm_set1_ps(gamma * 2 * rho0), rMin4 = _mm_set1_ps(Real(1e-9) * Real(h_));
+            const __m128 cohesionScale4 = _mm_set1_ps(kCohesionWeight * V);
+            for (; k + 4 <= end; k += 4) {
+                const uint32_t* j = &fluidNbr_.index[k];
+                const __m128 dx = _mm_sub_ps(xi4, _mm_set_ps(px_[j[3]], px_[j[2]], px_[j[1]], px_[j[0]]));
+                const __m128 dy = _mm_sub_ps(yi4, _mm_set_ps(py_[j[3]], py_[j[2]], py_[j[1]], py_[j[0]]));
+                const __m128 dz = _mm_sub_ps(zi4, _mm_set_ps(pz_[j[3]], pz_[j[2]], pz_[j[1]], pz_[j[0]]));
+                const __m128 r2 = _mm_add_ps(_mm_add_ps(_mm_mul_ps(dx, dx), _mm_mul_ps(dy, dy)), _mm_mul_ps(dz, dz));
+                const __m128 sc = kernel4.gradFactor(_mm_sqrt_ps(r2));
+                __m128 c = _mm_setzero_ps();
+                if (pressure) {
+                    const __m128 pj = _mm_set_ps(pOverRho2[j[3]], pOverRho2[j[2]], pOverRho2[j[1]], pOverRho2[j[0]]);
+                    c = _mm_sub_ps(c, _mm_mul_ps(m4, _mm_add_ps(pm4, pj)));
+                }
+                if (nu > 0) {
+                    const Vec3 &v0 = v_[j[0]], &v1 = v_[j[1]], &v2 = v_[j[2]], &v3 = v_[j[3]];
+                    const __m128 dvx = _mm_sub_ps(vx4, _mm_set_ps(v3.x(), v2.x(), v1.x(), v0.x()));
+                    const __m128 dvy = _mm_sub_ps(vy4, _mm_set_ps(v3.y(), v2.y(), v1.y(), v0.y()));
+                    const __m128 dvz = _mm_sub_ps(vz4, _mm_set_ps(v3.z(), v2.z(), v1.z(), v0.z()));
+                    const __m128 dvdx =
+                        _mm_add_ps(_mm_add_ps(_mm_mul_ps(dvx, dx), _mm_mul_ps(dvy, dy)), _mm_mul_ps(dvz, dz));
+                    const __m128 rhoj = _mm_set_ps(rho_[j[3]], rho_[j[2]], rho_[j[1]], rho_[j[0]]);
+                    const __m128 den = _mm_mul_ps(_mm_add_ps(rhoi4, rhoj), _mm_add_ps(r2, eps4));
+                    c = _mm_add_ps(c, _mm_div_ps(_mm_mul_ps(visc4, dvdx), den));
+                }
+                __m128 cs = _mm_mul_ps(c, sc);
+                if (tension) {
+                    // Surface tension (see the scalar loop below): gamma K_ij (-(n_i - n_j)
+                    // - w C(r) / r x_ij); the cohesion part joins the pair scalar.
+                    const __m128 rhoj = _mm_set_ps(rho_[j[3]], rho_[j[2]], rho_[j[1]], rho_[j[0]]);
+                    const __m128 gK = _mm_div_ps(gammaK4, _mm_add_ps(rhoi4, rhoj));
+                    const __m128 r = _mm_sqrt_ps(r2);
+                    const __m128 coh = _mm_and_ps(_mm_cmpgt_ps(r, rMin4),
+                                                  _mm_div_ps(_mm_mul_ps(cohesionScale4, cohesion4.C(r)), r));
+                    cs = _mm_sub_ps(cs, _mm_mul_ps(gK, coh));
+                    const Vec3 &n0 = normal_[j[0]], &n1 = normal_[j[1]], &n2 = normal_[j[2]], &n3 = normal_[j[3]];
+                    tx = _mm_add_ps(tx, _mm_mul_ps(gK, _mm_set_ps(n3.x(), n2.x(), n1.x(), n0.x())));
+                    ty = _mm_add_ps(ty, _mm_mul_ps(gK, _mm_set_ps(n3.y(), n2.y(), n1.y(), n0.y())));
+                    tz = _mm_add_ps(tz, _mm_mul_ps(gK, _mm_set_ps(n3.z(), n2.z(), n1.z(), n0.z())));
+                    gKsum = _mm_add_ps(gKsum, gK);
+                }
+                ax = _mm_add_ps(ax, _mm_mul_ps(cs, dx));
+                ay = _mm_add_ps(ay, _mm_mul_ps(cs, dy));
+                az = _mm_add_ps(az, _mm_mul_ps(cs, dz));
+            }
+            // sum gK (n_j - n_i) = sum gK n_j - n_i sum gK
+            if (tension)
+                acc += Vec3(horizontalSum(tx), horizontalSum(ty), horizontalSum(tz)) - horizontalSum(gKsum) * normal_[i];
+            acc += Vec3(horizontalSum(ax), horizontalSum(ay), horizontalSum(az));
+        }
+#endif
+        for (; k < end; ++k) {
             const uint32_t j = fluidNbr_.index[k];
             const Vec3 xij = xi - x_[j];
-            const Vec3 vij = vi - v_[j];
-            // Viscosity: the SPH Laplacian of Monaghan / SPlisHSPlasH, with the pair volume
-            // m / rho_ij at the mean density so that it is symmetric in i and j and the
-            // pair forces cancel exactly (momentum is conserved).
-            const Real Vij = 2 * V * rho0 / (rho_[i] + rho_[j]);
-            if (nu > 0) acc += (10 * nu * Vij * vij.dot(xij) / (xij.squaredNorm() + eps2)) * fluidNbr_.gradW[k];
+            const Real r2 = xij.squaredNorm();
+            Real c = 0;
+            if (pressure) c -= m * (pi + pOverRho2[j]);
+            if (nu > 0) c += viscosityScale * (vi - v_[j]).dot(xij) / ((rhoi + rho_[j]) * (r2 + eps2));
+            if constexpr (kStoredGradients) acc += c * fluidNbr_.gradW[k];
+            else acc += (c * kernel_.gradWFactor(std::sqrt(r2))) * xij;
             if (tension) {
                 // Cohesion pulls neighbours to about one spacing, curvature flattens the
                 // surface; K_ij boosts the force where a particle lacks neighbours.
-                const Real r = xij.norm();
-                const Real Kij = 2 * rho0 / (rho_[i] + rho_[j]);
+                const Real r = std::sqrt(r2);
+                const Real Kij = 2 * rho0 / (rhoi + rho_[j]);
                 Vec3 f = -(normal_[i] - normal_[j]);
                 if (r > Real(1e-9) * Real(h_)) f -= (kCohesionWeight * V * cohesion_.C(r) / r) * xij;
                 acc += gamma * Kij * f;
             }
         }
-        if (nuWall > 0) {
-            for (uint32_t k = boundaryNbr_.offset[i]; k < boundaryNbr_.offset[i + 1]; ++k) {
-                const Vec3 xib = xi - bx_[boundaryNbr_.index[k]];
-                const Real Vb = bVolume_[boundaryNbr_.index[k]] * rho0 / rho_[i];
-                acc += (10 * nuWall * Vb * vi.dot(xib) / (xib.squaredNorm() + eps2)) * boundaryNbr_.gradW[k];
+        if (nuWall > 0 || (pressure && pi != 0)) {
+            for (uint32_t k = boundaryNbr_.begin(i); k < boundaryNbr_.end(i); ++k) {
+                const uint32_t b = boundaryNbr_.index[k];
+                const Vec3 xib = xi - bx_[b];
+                const Real r2 = xib.squaredNorm();
+                const Vec3 grad = gradient(boundaryNbr_, k, xib, r2);
+                // Walls push with the fluid particle's own pressure (Akinci 2012).
+                if (pressure) acc -= (kWallMirror * rho0 * bVolume_[b] * pi) * grad;
+                if (nuWall > 0) acc += (10 * nuWall * bVolume_[b] * rho0 / rho_[i] * vi.dot(xib) / (r2 + eps2)) * grad;
             }
         }
         a_[i] = acc;
     });
+}
+
+void FluidSimulation::computeAccelerations(const Real* pOverRho2) {
+    if (storeGradients_) accelerationSweep<true>(pOverRho2);
+    else accelerationSweep<false>(pOverRho2);
     if (magnetics_) magnetics_->addKelvinAcceleration(a_);
 }
 
@@ -526,17 +743,9 @@ void FluidSimulation::stepWCSPH(double dt) {
         p_[i] = Real(std::max(0.0, B * (r4 * r2 * ratio - 1)));
         pOverRho2[i] = p_[i] / (rho_[i] * rho_[i]);
     });
-    nonPressureAccelerations(dt);
-    const Real m = Real(mass_), rho0 = Real(rho0_);
-    forEachParticle(n, [&](size_t i) {
-        const Real pi = pOverRho2[i];
-        Vec3 acc = Vec3::Zero();
-        for (uint32_t k = fluidNbr_.offset[i]; k < fluidNbr_.offset[i + 1]; ++k)
-            acc -= (m * (pi + pOverRho2[fluidNbr_.index[k]])) * fluidNbr_.gradW[k];
-        for (uint32_t k = boundaryNbr_.offset[i]; k < boundaryNbr_.offset[i + 1]; ++k)
-            acc -= (kWallMirror * rho0 * bVolume_[boundaryNbr_.index[k]] * pi) * boundaryNbr_.gradW[k];
-        v_[i] += Real(dt) * (a_[i] + acc);
-    });
+    // One sweep: pressure, viscosity, tension, gravity, Kelvin force.
+    computeAccelerations(pOverRho2.data());
+    forEachParticle(n, [&](size_t i) { v_[i] += Real(dt) * a_[i]; });
     stats_.pressureIterations = 0;
     stats_.divergenceIterations = 0;
     stats_.densityError = deterministicSum(n, [&](size_t i) { return std::max(0.0, double(rho_[i]) / rho0_ - 1); }) /
@@ -550,10 +759,10 @@ void FluidSimulation::pressureAccelerations(const std::vector<Real>& kappa) {
     forEachParticle(x_.size(), [&](size_t i) {
         const Real ki = kappa[i];
         Vec3 acc = Vec3::Zero();
-        for (uint32_t k = fluidNbr_.offset[i]; k < fluidNbr_.offset[i + 1]; ++k)
+        for (uint32_t k = fluidNbr_.begin(i); k < fluidNbr_.end(i); ++k)
             acc -= (V * (ki + kappa[fluidNbr_.index[k]])) * fluidNbr_.gradW[k];
         if (ki != 0)
-            for (uint32_t k = boundaryNbr_.offset[i]; k < boundaryNbr_.offset[i + 1]; ++k)
+            for (uint32_t k = boundaryNbr_.begin(i); k < boundaryNbr_.end(i); ++k)
                 acc -= (kWallMirror * bVolume_[boundaryNbr_.index[k]] * ki) * boundaryNbr_.gradW[k];
         a_[i] = acc;
     });
@@ -577,10 +786,10 @@ int FluidSimulation::relaxedJacobi(std::vector<Real>& kappa, const std::vector<R
         forEachParticle(n, [&](size_t i) {
             const Vec3 ai = a_[i];
             Real Ap = 0;
-            for (uint32_t k = fluidNbr_.offset[i]; k < fluidNbr_.offset[i + 1]; ++k)
+            for (uint32_t k = fluidNbr_.begin(i); k < fluidNbr_.end(i); ++k)
                 Ap += (ai - a_[fluidNbr_.index[k]]).dot(fluidNbr_.gradW[k]);
             Ap *= V;
-            for (uint32_t k = boundaryNbr_.offset[i]; k < boundaryNbr_.offset[i + 1]; ++k)
+            for (uint32_t k = boundaryNbr_.begin(i); k < boundaryNbr_.end(i); ++k)
                 Ap += bVolume_[boundaryNbr_.index[k]] * ai.dot(boundaryNbr_.gradW[k]);
             Ap *= hp;
             const Real r = source[i] - Ap;
@@ -603,16 +812,16 @@ Real FluidSimulation::densityRate(size_t i) const {
     // D(rho / rho0)/Dt = sum_j V (v_i - v_j) . grad W_ij + sum_b V_b v_i . grad W_ib
     // (walls are at rest).
     Real rate = 0;
-    for (uint32_t k = fluidNbr_.offset[i]; k < fluidNbr_.offset[i + 1]; ++k)
+    for (uint32_t k = fluidNbr_.begin(i); k < fluidNbr_.end(i); ++k)
         rate += (v_[i] - v_[fluidNbr_.index[k]]).dot(fluidNbr_.gradW[k]);
     rate *= Real(volume_);
-    for (uint32_t k = boundaryNbr_.offset[i]; k < boundaryNbr_.offset[i + 1]; ++k)
+    for (uint32_t k = boundaryNbr_.begin(i); k < boundaryNbr_.end(i); ++k)
         rate += bVolume_[boundaryNbr_.index[k]] * v_[i].dot(boundaryNbr_.gradW[k]);
     return rate;
 }
 
 uint32_t FluidSimulation::neighborCount(size_t i) const {
-    return (fluidNbr_.offset[i + 1] - fluidNbr_.offset[i]) + (boundaryNbr_.offset[i + 1] - boundaryNbr_.offset[i]);
+    return fluidNbr_.count[i] + boundaryNbr_.count[i];
 }
 
 void FluidSimulation::solveDivergence(double dt) {
@@ -672,6 +881,10 @@ void FluidSimulation::integratePositions(double dt) {
             bad.compare_exchange_strong(expected, i);
         }
         container_->constrain(xOld_[i], x_[i], v_[i]);
+        // The split copy the vectorized neighbour loops gather from.
+        px_[i] = x_[i].x();
+        py_[i] = x_[i].y();
+        pz_[i] = x_[i].z();
     });
     if (bad != size_t(-1)) {
         std::ostringstream msg;
@@ -694,7 +907,7 @@ double FluidSimulation::step(double dtLimit) {
     } else {
         computeFactors();
         solveDivergence(dt);
-        nonPressureAccelerations(dt);
+        computeAccelerations(nullptr);   // everything but pressure
         forEachParticle(x_.size(), [&](size_t i) { v_[i] += Real(dt) * a_[i]; });
         solveDensity(dt);
     }
@@ -702,7 +915,7 @@ double FluidSimulation::step(double dtLimit) {
     time_ += dt;
     ++steps_;
     stats_.dt = dt;
-    sortAndSearch();
+    refreshNeighbors(false);
     return dt;
 }
 
@@ -711,6 +924,9 @@ void FluidSimulation::advanceTo(double tEnd) {
     // from a frame file (positions, velocities, pressures) continues exactly like an
     // uninterrupted one. It converges in a few iterations from zero.
     std::fill(kappaV_.begin(), kappaV_.end(), Real(0));
+    // A frame starts from a fresh search too: the particle order and the neighbour slots
+    // are then a function of the frame's state alone, as in a run resumed from its file.
+    if (searchStep_ != steps_) refreshNeighbors(true);
     frameStart_ = true;
     while (time_ < tEnd) {
         step(tEnd - time_);
@@ -759,7 +975,7 @@ void FluidSimulation::setState(double time, const std::vector<Vec3>& xById, cons
     std::fill(kappaV_.begin(), kappaV_.end(), Real(0));
     if (magnetics_ && HById.size() == x_.size() && MById.size() == x_.size())
         magnetics_->setState(HById, MById);   // id order = current order until the sort below
-    sortAndSearch();
+    refreshNeighbors(true);
 }
 
 } // namespace ferro

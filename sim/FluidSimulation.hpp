@@ -32,7 +32,9 @@ struct StepStats {
     int pressureIterations = 0;
     int divergenceIterations = 0;
     double densityError = 0;     ///< mean relative compression after the step's solve
-    size_t neighborPairs = 0;
+    size_t neighborPairs = 0;    ///< fluid-fluid pairs closer than the kernel support
+    size_t candidatePairs = 0;   ///< fluid-fluid pairs of the last search (support plus skin)
+    size_t searches = 0;         ///< neighbour searches so far
 };
 
 /// Initial fluid particles of a scene (lattice fill of its blocks) and their spacing.
@@ -100,9 +102,18 @@ public:
     const std::vector<Vec3>& boundaryPositions() const { return bx_; }
 
 private:
-    void sortAndSearch();
+    /// Brings the neighbour lists and densities up to date with the positions: a new
+    /// search (particle sort, candidates within support plus skin) when `forceSearch` or
+    /// when the skin may be used up, then this step's neighbours among the candidates.
+    void refreshNeighbors(bool forceSearch);
+    void searchCandidates();
+    void updateNeighbors();
     void computeFactors();
-    void nonPressureAccelerations(double dt);
+    /// a_ = gravity + viscosity + surface tension + Kelvin force, plus the WCSPH pressure
+    /// force when `pOverRho2` (p / rho^2 per particle) is given: one sweep of the lists.
+    void computeAccelerations(const Real* pOverRho2);
+    template <bool kStoredGradients>
+    void accelerationSweep(const Real* pOverRho2);
     double chooseTimeStep(double dtLimit) const;
     void stepWCSPH(double dt);
     void solveDivergence(double dt);
@@ -135,6 +146,11 @@ private:
     std::vector<uint16_t> boundaryCount_;
     SortedGrid grid_;
     NeighborLists fluidNbr_, boundaryNbr_;
+    std::vector<uint32_t> fluidCandidates_, boundaryCandidates_; // slots of the last search
+    std::vector<Vec3> xSearch_;               // positions at the last search
+    size_t searchStep_ = size_t(-1);          // step count at the last search
+    double skin_ = 0;                         // Verlet skin [m]; 0 = search every step
+    bool storeGradients_ = true;              // keep grad W per pair (DFSPH sweeps)
     std::vector<Real> px_, py_, pz_;          // coordinates again, split for the search
     std::vector<uint32_t> scratch_, bScratch_; // fixed-capacity neighbour lists of pass 1
     std::vector<uint32_t> order_;

@@ -64,13 +64,29 @@ private:
     std::vector<uint64_t> keys_;
 };
 
-/// Compressed neighbour lists with the kernel gradient of each pair stored beside the
-/// index: the iterative pressure solvers sweep them many times per step.
+/// Neighbour lists in fixed slots. Particle i owns the slots [offset[i], offset[i + 1]),
+/// one for every candidate of the last search (within the kernel support plus a skin, so
+/// the slots stay valid while particles move less than half the skin); its neighbours of
+/// the current step (closer than the support) are the first count[i] of them. The kernel
+/// gradient of each pair is stored beside its index only when a solver sweeps the lists
+/// many times per step (DFSPH's iterations); otherwise gradW is empty and loops evaluate
+/// the kernel themselves, which is cheaper than storing and loading 12 bytes a pair.
 struct NeighborLists {
-    std::vector<uint32_t> offset;   ///< size n + 1
-    std::vector<uint32_t> index;    ///< neighbour indices, pair k of particle i at offset[i] + k
-    std::vector<Vec3> gradW;        ///< grad_i W(x_i - x_j) of each pair
-    size_t pairs() const { return index.size(); }
+    std::vector<uint32_t> offset;   ///< size n + 1: first slot of each particle
+    std::vector<uint32_t> count;    ///< size n: current neighbours of each particle
+    std::vector<uint32_t> index;    ///< neighbour indices, neighbour k of particle i at offset[i] + k
+    std::vector<Vec3> gradW;        ///< grad_i W(x_i - x_j) of each pair (empty if not stored)
+
+    uint32_t begin(size_t i) const { return offset[i]; }
+    uint32_t end(size_t i) const { return offset[i] + count[i]; }
+    bool hasGradients() const { return !index.empty() && gradW.size() == index.size(); }
+    /// Lists for n particles without neighbours.
+    void clear(size_t n) {
+        offset.assign(n + 1, 0);
+        count.assign(n, 0);
+        index.clear();
+        gradW.clear();
+    }
 };
 
 } // namespace ferro

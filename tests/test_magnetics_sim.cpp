@@ -84,7 +84,7 @@ moment = 2.0
     REQUIRE(mag.magnetic());
     std::vector<Vec3> x = {Vec3(0, 0, 0.01f), Vec3(0.01f, 0.004f, 0.012f), Vec3(-0.02f, 0.01f, 0.03f)};
     NeighborLists none;
-    none.offset.assign(x.size() + 1, 0);
+    none.clear(x.size());
     mag.update(0.0, x, none, true);
     std::vector<Vec3> a(x.size(), Vec3::Zero());
     mag.addKelvinAcceleration(a);
