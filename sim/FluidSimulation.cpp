@@ -144,6 +144,22 @@ inline uint32_t gatherNeighbors(const SortedGrid& grid, const Real* px, const Re
     return count;
 }
 
+#if defined(__SSE2__)
+/// a[j[0..3]] in four lanes.
+inline __m128 gather4(const Real* a, const uint32_t* j) { return _mm_set_ps(a[j[3]], a[j[2]], a[j[1]], a[j[0]]); }
+
+/// Offsets x_i - x_j to four points j (coordinates split into px, py, pz) and their squared
+/// lengths, for the loops that take four pairs at a time.
+struct PairOffsets4 {
+    __m128 dx, dy, dz, r2;
+    PairOffsets4(const Vec3& xi, const Real* px, const Real* py, const Real* pz, const uint32_t* j)
+        : dx(_mm_sub_ps(_mm_set1_ps(xi.x()), gather4(px, j))),
+          dy(_mm_sub_ps(_mm_set1_ps(xi.y()), gather4(py, j))),
+          dz(_mm_sub_ps(_mm_set1_ps(xi.z()), gather4(pz, j))),
+          r2(_mm_add_ps(_mm_add_ps(_mm_mul_ps(dx, dx), _mm_mul_ps(dy, dy)), _mm_mul_ps(dz, dz))) {}
+};
+#endif
+
 void splitCoordinates(const std::vector<Vec3>& x, std::vector<Real>& px, std::vector<Real>& py,
                       std::vector<Real>& pz) {
     px.resize(x.size());
@@ -441,25 +457,21 @@ void FluidSimulation::updateNeighbors() {
         uint32_t cnt = 0, k = 0;
         Real sum = 0;
 #if defined(__SSE2__)
-        const __m128 xi4 = _mm_set1_ps(xi.x()), yi4 = _mm_set1_ps(xi.y()), zi4 = _mm_set1_ps(xi.z());
         const __m128 h24 = _mm_set1_ps(h2);
         __m128 sum4 = _mm_setzero_ps();
         for (; k + 4 <= slots; k += 4) {
             const uint32_t* c = cand + k;
-            const __m128 dx = _mm_sub_ps(xi4, _mm_set_ps(qx[c[3]], qx[c[2]], qx[c[1]], qx[c[0]]));
-            const __m128 dy = _mm_sub_ps(yi4, _mm_set_ps(qy[c[3]], qy[c[2]], qy[c[1]], qy[c[0]]));
-            const __m128 dz = _mm_sub_ps(zi4, _mm_set_ps(qz[c[3]], qz[c[2]], qz[c[1]], qz[c[0]]));
-            const __m128 r2 = _mm_add_ps(_mm_add_ps(_mm_mul_ps(dx, dx), _mm_mul_ps(dy, dy)), _mm_mul_ps(dz, dz));
-            const __m128 r = _mm_sqrt_ps(r2);
-            const __m128 vol = volume ? _mm_set_ps(volume[c[3]], volume[c[2]], volume[c[1]], volume[c[0]]) : _mm_set1_ps(V);
+            const PairOffsets4 d(xi, qx, qy, qz, c);
+            const __m128 r = _mm_sqrt_ps(d.r2);
+            const __m128 vol = volume ? gather4(volume, c) : _mm_set1_ps(V);
             sum4 = _mm_add_ps(sum4, _mm_mul_ps(vol, kernel4.W(r)));
-            const int hit = _mm_movemask_ps(_mm_cmplt_ps(r2, h24));
+            const int hit = _mm_movemask_ps(_mm_cmplt_ps(d.r2, h24));
             if (grad) {
                 const __m128 sc = kernel4.gradFactor(r);
                 alignas(16) float gx[4], gy[4], gz[4];
-                _mm_store_ps(gx, _mm_mul_ps(sc, dx));
-                _mm_store_ps(gy, _mm_mul_ps(sc, dy));
-                _mm_store_ps(gz, _mm_mul_ps(sc, dz));
+                _mm_store_ps(gx, _mm_mul_ps(sc, d.dx));
+                _mm_store_ps(gy, _mm_mul_ps(sc, d.dy));
+                _mm_store_ps(gz, _mm_mul_ps(sc, d.dz));
                 for (int l = 0; l < 4; ++l) {
                     out[cnt] = c[l];
                     grad[cnt] = Vec3(gx[l], gy[l], gz[l]);
@@ -585,20 +597,16 @@ void FluidSimulation::accelerationSweep(const Real* pOverRho2) {
             const uint32_t end = fluidNbr_.end(i);
 #if defined(__SSE2__)
             if constexpr (!kStoredGradients) {
-                const __m128 xi4 = _mm_set1_ps(x_[i].x()), yi4 = _mm_set1_ps(x_[i].y()), zi4 = _mm_set1_ps(x_[i].z());
                 const __m128 rho04 = _mm_set1_ps(rho0);
                 __m128 sx = _mm_setzero_ps(), sy = _mm_setzero_ps(), sz = _mm_setzero_ps();
                 for (; k + 4 <= end; k += 4) {
                     const uint32_t* j = &fluidNbr_.index[k];
-                    const __m128 dx = _mm_sub_ps(xi4, _mm_set_ps(px_[j[3]], px_[j[2]], px_[j[1]], px_[j[0]]));
-                    const __m128 dy = _mm_sub_ps(yi4, _mm_set_ps(py_[j[3]], py_[j[2]], py_[j[1]], py_[j[0]]));
-                    const __m128 dz = _mm_sub_ps(zi4, _mm_set_ps(pz_[j[3]], pz_[j[2]], pz_[j[1]], pz_[j[0]]));
-                    const __m128 r2 = _mm_add_ps(_mm_add_ps(_mm_mul_ps(dx, dx), _mm_mul_ps(dy, dy)), _mm_mul_ps(dz, dz));
-                    const __m128 rhoj = _mm_set_ps(rho_[j[3]], rho_[j[2]], rho_[j[1]], rho_[j[0]]);
-                    const __m128 f = _mm_mul_ps(_mm_div_ps(rho04, rhoj), kernel4.gradFactor(_mm_sqrt_ps(r2)));
-                    sx = _mm_add_ps(sx, _mm_mul_ps(f, dx));
-                    sy = _mm_add_ps(sy, _mm_mul_ps(f, dy));
-                    sz = _mm_add_ps(sz, _mm_mul_ps(f, dz));
+                    const PairOffsets4 d(x_[i], px_.data(), py_.data(), pz_.data(), j);
+                    const __m128 f =
+                        _mm_mul_ps(_mm_div_ps(rho04, gather4(rho_.data(), j)), kernel4.gradFactor(_mm_sqrt_ps(d.r2)));
+                    sx = _mm_add_ps(sx, _mm_mul_ps(f, d.dx));
+                    sy = _mm_add_ps(sy, _mm_mul_ps(f, d.dy));
+                    sz = _mm_add_ps(sz, _mm_mul_ps(f, d.dz));
                 }
                 sum = Vec3(horizontalSum(sx), horizontalSum(sy), horizontalSum(sz));
             }
@@ -632,7 +640,6 @@ void FluidSimulation::accelerationSweep(const Real* pOverRho2) {
 #if defined(__SSE2__)
         if constexpr (!kStoredGradients) {
             // Four pairs at a time; the kernel gradient is evaluated here, not loaded.
-            const __m128 xi4 = _mm_set1_ps(xi.x()), yi4 = _mm_set1_ps(xi.y()), zi4 = _mm_set1_ps(xi.z());
             const __m128 vx4 = _mm_set1_ps(vi.x()), vy4 = _mm_set1_ps(vi.y()), vz4 = _mm_set1_ps(vi.z());
             const __m128 rhoi4 = _mm_set1_ps(rhoi), pm4 = _mm_set1_ps(pi), m4 = _mm_set1_ps(m);
             const __m128 visc4 = _mm_set1_ps(viscosityScale), eps4 = _mm_set1_ps(eps2);
@@ -642,15 +649,12 @@ void FluidSimulation::accelerationSweep(const Real* pOverRho2) {
             const __m128 cohesionScale4 = _mm_set1_ps(kCohesionWeight * V);
             for (; k + 4 <= end; k += 4) {
                 const uint32_t* j = &fluidNbr_.index[k];
-                const __m128 dx = _mm_sub_ps(xi4, _mm_set_ps(px_[j[3]], px_[j[2]], px_[j[1]], px_[j[0]]));
-                const __m128 dy = _mm_sub_ps(yi4, _mm_set_ps(py_[j[3]], py_[j[2]], py_[j[1]], py_[j[0]]));
-                const __m128 dz = _mm_sub_ps(zi4, _mm_set_ps(pz_[j[3]], pz_[j[2]], pz_[j[1]], pz_[j[0]]));
-                const __m128 r2 = _mm_add_ps(_mm_add_ps(_mm_mul_ps(dx, dx), _mm_mul_ps(dy, dy)), _mm_mul_ps(dz, dz));
+                const PairOffsets4 d(xi, px_.data(), py_.data(), pz_.data(), j);
+                const __m128 &dx = d.dx, &dy = d.dy, &dz = d.dz, &r2 = d.r2;
                 const __m128 sc = kernel4.gradFactor(_mm_sqrt_ps(r2));
                 __m128 c = _mm_setzero_ps();
                 if (pressure) {
-                    const __m128 pj = _mm_set_ps(pOverRho2[j[3]], pOverRho2[j[2]], pOverRho2[j[1]], pOverRho2[j[0]]);
-                    c = _mm_sub_ps(c, _mm_mul_ps(m4, _mm_add_ps(pm4, pj)));
+                    c = _mm_sub_ps(c, _mm_mul_ps(m4, _mm_add_ps(pm4, gather4(pOverRho2, j))));
                 }
                 if (nu > 0) {
                     const Vec3 &v0 = v_[j[0]], &v1 = v_[j[1]], &v2 = v_[j[2]], &v3 = v_[j[3]];
@@ -659,16 +663,14 @@ void FluidSimulation::accelerationSweep(const Real* pOverRho2) {
                     const __m128 dvz = _mm_sub_ps(vz4, _mm_set_ps(v3.z(), v2.z(), v1.z(), v0.z()));
                     const __m128 dvdx =
                         _mm_add_ps(_mm_add_ps(_mm_mul_ps(dvx, dx), _mm_mul_ps(dvy, dy)), _mm_mul_ps(dvz, dz));
-                    const __m128 rhoj = _mm_set_ps(rho_[j[3]], rho_[j[2]], rho_[j[1]], rho_[j[0]]);
-                    const __m128 den = _mm_mul_ps(_mm_add_ps(rhoi4, rhoj), _mm_add_ps(r2, eps4));
+                    const __m128 den = _mm_mul_ps(_mm_add_ps(rhoi4, gather4(rho_.data(), j)), _mm_add_ps(r2, eps4));
                     c = _mm_add_ps(c, _mm_div_ps(_mm_mul_ps(visc4, dvdx), den));
                 }
                 __m128 cs = _mm_mul_ps(c, sc);
                 if (tension) {
                     // Surface tension (see the scalar loop below): gamma K_ij (-(n_i - n_j)
                     // - w C(r) / r x_ij); the cohesion part joins the pair scalar.
-                    const __m128 rhoj = _mm_set_ps(rho_[j[3]], rho_[j[2]], rho_[j[1]], rho_[j[0]]);
-                    const __m128 gK = _mm_div_ps(gammaK4, _mm_add_ps(rhoi4, rhoj));
+                    const __m128 gK = _mm_div_ps(gammaK4, _mm_add_ps(rhoi4, gather4(rho_.data(), j)));
                     const __m128 r = _mm_sqrt_ps(r2);
                     const __m128 coh = _mm_and_ps(_mm_cmpgt_ps(r, rMin4),
                                                   _mm_div_ps(_mm_mul_ps(cohesionScale4, cohesion4.C(r)), r));
