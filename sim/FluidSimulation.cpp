@@ -255,11 +255,19 @@ FluidSimulation::FluidSimulation(const SimScene& scene)
     kappaV_.assign(n, 0);
 
     // Boundary particles and their Akinci volumes V_b = 1 / sum_k W_bk.
+    // DFSPH sweeps the lists a dozen times a step and keeps each pair's kernel gradient;
+    // so does the induced Kelvin force. WCSPH sweeps them once and takes small steps, so
+    // it evaluates the kernel in its sweep and searches only when the skin is used up.
+    storeGradients_ = scene_.solver.kind == SolverParams::Kind::DFSPH || scene_.magnetization.inducedForce;
+    skin_ = scene_.solver.kind == SolverParams::Kind::WCSPH ? kNeighborSkin * h_ : 0.0;
+
     bx_ = container_->sampleWalls(spacing_, 0.5 * spacing_);
     {
         std::vector<uint32_t> tie(bx_.size()), order;
         for (size_t i = 0; i < tie.size(); ++i) tie[i] = uint32_t(i);
-        bGrid_.sort(bx_, tie, Real(h_), order);
+        // Cells as wide as the search radius: the 3 x 3 x 3 stencil then holds every
+        // candidate (the Akinci volumes below test r < h themselves).
+        bGrid_.sort(bx_, tie, Real(h_ + skin_), order);
         std::vector<Vec3> sorted(bx_.size());
         for (size_t k = 0; k < order.size(); ++k) sorted[k] = bx_[order[k]];
         bx_.swap(sorted);
@@ -329,12 +337,6 @@ FluidSimulation::FluidSimulation(const SimScene& scene)
 
     if (!scene_.magnets.empty()) magnetics_ = std::make_unique<FluidMagnetics>(scene_, volume_, spacing_);
 
-    // DFSPH sweeps the lists a dozen times a step and keeps each pair's kernel gradient;
-    // so does the induced Kelvin force. WCSPH sweeps them once and takes small steps, so
-    // it evaluates the kernel in its sweep and searches only when the skin is used up.
-    storeGradients_ = scene_.solver.kind == SolverParams::Kind::DFSPH || scene_.magnetization.inducedForce;
-    skin_ = scene_.solver.kind == SolverParams::Kind::WCSPH ? kNeighborSkin * h_ : 0.0;
-
     refreshNeighbors(true);
     // The field of the initial state, so that frame 0 carries H and M too.
     if (magnetics_) magnetics_->update(time_, x_, fluidNbr_, true);
@@ -354,7 +356,8 @@ void FluidSimulation::refreshNeighbors(bool forceSearch) {
                 return m;
             },
             [](Real a, Real b) { return std::max(a, b); });
-        search = !(4 * double(moved2) < skin_ * skin_);   // also true for NaN
+        // (A non-finite position never gets here: integratePositions stops the run.)
+        search = !(4 * double(moved2) < skin_ * skin_);
     }
     if (search) searchCandidates();
     updateNeighbors();
@@ -362,7 +365,10 @@ void FluidSimulation::refreshNeighbors(bool forceSearch) {
 
 void FluidSimulation::searchCandidates() {
     const size_t n = x_.size();
-    grid_.sort(x_, id_, Real(h_), order_);
+    // Cells as wide as the search radius, so that the 3 x 3 x 3 stencil holds every
+    // candidate within the support plus the skin.
+    const Real radius = Real(h_ + skin_);
+    grid_.sort(x_, id_, radius, order_);
     permute(x_, order_);
     permute(v_, order_);
     permute(id_, order_);
@@ -376,7 +382,6 @@ void FluidSimulation::searchCandidates() {
     ++stats_.searches;
 
     const bool haveBoundary = !bx_.empty();
-    const Real radius = Real(h_ + skin_);
 
     // Candidates within the support plus the skin, into fixed-capacity scratch lists. The
     // candidate buffer is generous (every candidate is written before it is tested); only
@@ -406,8 +411,15 @@ void FluidSimulation::searchCandidates() {
             }
         });
         if (!overflow) break;
-        // Grow to the largest count seen (a few extra for the next steps).
+        // Grow to the largest count seen (a few extra for the next steps). More than kRoom
+        // candidates means particles piled up far beyond any SPH density: stop, do not loop.
         for (size_t i = 0; i < n; ++i) {
+            if (fluidCount[i] > kRoom || boundaryCount[i] > kRoom) {
+                std::ostringstream msg;
+                msg << "particle " << id_[i] << " has more than " << kRoom << " neighbour candidates at t = " << time_
+                    << " s: the fluid collapsed (time step too large or forces too strong)";
+                throw SimulationError(msg.str());
+            }
             if (fluidCount[i] > capacity_) capacity_ = std::min<size_t>(fluidCount[i] + 16, kRoom);
             if (boundaryCount[i] > bCapacity_) bCapacity_ = std::min<size_t>(boundaryCount[i] + 16, kRoom);
         }
@@ -633,7 +645,8 @@ void FluidSimulation::accelerationSweep(const Real* pOverRho2) {
         // the WCSPH pressure -m (p_i / rho_i^2 + p_j / rho_j^2), symmetric in i and j, and
         // the viscosity of Monaghan / SPlisHSPlasH, 10 nu V_ij (v_ij . x_ij) / (r^2 + eps^2)
         // with the pair volume V_ij = m / rho_ij at the mean density, symmetric too, so the
-        // pair forces cancel exactly and momentum is conserved.
+        // pair forces cancel (up to rounding: i may take a pair in the four-lane loop and j
+        // in the scalar tail) and momentum is conserved.
         const Real viscosityScale = 10 * nu * 2 * V * rho0;
         uint32_t k = fluidNbr_.begin(i);
         const uint32_t end = fluidNbr_.end(i);

@@ -151,8 +151,9 @@ private:
     size_t searchStep_ = size_t(-1);          // step count at the last search
     double skin_ = 0;                         // Verlet skin [m]; 0 = search every step
     bool storeGradients_ = true;              // keep grad W per pair (DFSPH sweeps)
-    std::vector<Real> px_, py_, pz_;          // coordinates again, split for the search
-    std::vector<uint32_t> scratch_, bScratch_; // fixed-capacity neighbour lists of pass 1
+    std::vector<Real> px_, py_, pz_;          // coordinates again, split (kept current) for the
+                                              // search and the four-pair loops
+    std::vector<uint32_t> scratch_, bScratch_; // fixed-capacity candidate lists of a search
     std::vector<uint32_t> order_;
     size_t capacity_ = 64, bCapacity_ = 32;
 

@@ -61,8 +61,9 @@ public:
     Real gradWFactor(Real r) const {
         const Real q = r * invH_;
         const Real f = std::max(1 - q, Real(0));
-        const Real inner = l_ * q * (Real(3) * q - 2);
-        const Real outer = -l_ * f * f;
+        // Grouped as in CubicSplineKernel4, so both paths round alike.
+        const Real inner = l_ * (q * (Real(3) * q - 2));
+        const Real outer = l_ * (0 - f * f);
         const Real dWdq = q <= Real(0.5) ? inner : outer;
         return r > Real(1e-9) * h_ ? dWdq * invH_ / r : Real(0);
     }
@@ -71,8 +72,8 @@ public:
     Real WBlended(Real r2) const {
         const Real q = std::sqrt(r2) * invH_;
         const Real f = std::max(1 - q, Real(0));
-        const Real inner = Real(6) * q * q * (q - 1) + 1;
-        const Real outer = 2 * f * f * f;
+        const Real inner = Real(6) * (q * q) * (q - 1) + 1;
+        const Real outer = 2 * (f * (f * f));
         return k_ * (q <= Real(0.5) ? inner : outer);
     }
 
@@ -105,7 +106,7 @@ public:
     Real C(Real r) const {
         if (r <= 0 || r >= h_) return 0;
         const Real hr = h_ - r;
-        const Real v = hr * hr * hr * r * r * r;
+        const Real v = (hr * (hr * hr)) * (r * (r * r));   // grouped as in CohesionKernel4
         if (2 * r > h_) return c_ * v;
         return c_ * (2 * v - h6over64_);
     }

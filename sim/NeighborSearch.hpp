@@ -1,7 +1,7 @@
 #pragma once
 // Uniform-grid neighbour search over particles sorted by cell.
 //
-// Fluid particles are reordered every step by (cell, id): neighbours in memory are
+// Fluid particles are reordered at every search by (cell, id): neighbours in memory are
 // neighbours in space (cache-friendly loops), each row of three cells is one contiguous
 // index range, and the order is a pure function of the positions, so a resumed run
 // sums in exactly the same order as an uninterrupted one (bitwise-identical frames).
