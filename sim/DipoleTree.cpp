@@ -34,6 +34,27 @@ struct Sources {
     const float *x, *y, *z, *mx, *my, *mz, *a2, *ai3;
 };
 
+#ifdef FERRO_DIPOLE_SSE
+// Sources i .. i+3 of s seen from the target t (each coordinate in all four lanes), scaled
+// float units: offsets d = t - x, r^2 = |d|^2, inv = 1/r with r^2 clamped below at kMinR2,
+// inv2 = inv^2, the moments m and d . m. What both particle kernels start from.
+struct SourcePairs4 {
+    __m128 dx, dy, dz, r2, inv, inv2, mx, my, mz, dot;
+    SourcePairs4(const __m128 t[3], const Sources& s, size_t i) {
+        dx = _mm_sub_ps(t[0], _mm_loadu_ps(s.x + i));
+        dy = _mm_sub_ps(t[1], _mm_loadu_ps(s.y + i));
+        dz = _mm_sub_ps(t[2], _mm_loadu_ps(s.z + i));
+        r2 = _mm_add_ps(_mm_add_ps(_mm_mul_ps(dx, dx), _mm_mul_ps(dy, dy)), _mm_mul_ps(dz, dz));
+        inv = _mm_div_ps(_mm_set1_ps(1.0f), _mm_sqrt_ps(_mm_max_ps(r2, _mm_set1_ps(kMinR2))));
+        inv2 = _mm_mul_ps(inv, inv);
+        mx = _mm_loadu_ps(s.mx + i);
+        my = _mm_loadu_ps(s.my + i);
+        mz = _mm_loadu_ps(s.mz + i);
+        dot = _mm_add_ps(_mm_add_ps(_mm_mul_ps(dx, mx), _mm_mul_ps(dy, my)), _mm_mul_ps(dz, mz));
+    }
+};
+#endif
+
 // Field sum (without the 1/4pi) at target t from sources [b, e). Inside = apply the
 // uniform-sphere rule for targets within a source's radius (particles); far cells skip it.
 template <bool Inside>
@@ -42,29 +63,22 @@ inline void fieldKernel(const float t[3], const Sources& s, size_t b, size_t e, 
     float hx = 0, hy = 0, hz = 0;
 #ifdef FERRO_DIPOLE_SSE
     if (e - b >= 4) {
-        const __m128 tx = _mm_set1_ps(t[0]), ty = _mm_set1_ps(t[1]), tz = _mm_set1_ps(t[2]);
-        const __m128 one = _mm_set1_ps(1.0f), three = _mm_set1_ps(3.0f), minR2 = _mm_set1_ps(kMinR2);
+        const __m128 tv[3] = {_mm_set1_ps(t[0]), _mm_set1_ps(t[1]), _mm_set1_ps(t[2])};
+        const __m128 three = _mm_set1_ps(3.0f);
         __m128 ax = _mm_setzero_ps(), ay = _mm_setzero_ps(), az = _mm_setzero_ps();
         for (; i + 4 <= e; i += 4) {
-            const __m128 dx = _mm_sub_ps(tx, _mm_loadu_ps(s.x + i));
-            const __m128 dy = _mm_sub_ps(ty, _mm_loadu_ps(s.y + i));
-            const __m128 dz = _mm_sub_ps(tz, _mm_loadu_ps(s.z + i));
-            const __m128 r2 = _mm_add_ps(_mm_add_ps(_mm_mul_ps(dx, dx), _mm_mul_ps(dy, dy)), _mm_mul_ps(dz, dz));
-            const __m128 inv = _mm_div_ps(one, _mm_sqrt_ps(_mm_max_ps(r2, minR2)));
-            const __m128 inv2 = _mm_mul_ps(inv, inv);
-            __m128 c2 = _mm_mul_ps(inv2, inv);                 // 1/r^3
-            __m128 c1 = _mm_mul_ps(_mm_mul_ps(three, c2), inv2); // 3/r^5
+            const SourcePairs4 p(tv, s, i);
+            __m128 c2 = _mm_mul_ps(p.inv2, p.inv);                 // 1/r^3
+            __m128 c1 = _mm_mul_ps(_mm_mul_ps(three, c2), p.inv2); // 3/r^5
             if (Inside) {
-                const __m128 in = _mm_cmplt_ps(r2, _mm_loadu_ps(s.a2 + i));
+                const __m128 in = _mm_cmplt_ps(p.r2, _mm_loadu_ps(s.a2 + i));
                 c1 = _mm_andnot_ps(in, c1);
                 c2 = _mm_or_ps(_mm_and_ps(in, _mm_loadu_ps(s.ai3 + i)), _mm_andnot_ps(in, c2));
             }
-            const __m128 mx = _mm_loadu_ps(s.mx + i), my = _mm_loadu_ps(s.my + i), mz = _mm_loadu_ps(s.mz + i);
-            const __m128 dot = _mm_add_ps(_mm_add_ps(_mm_mul_ps(dx, mx), _mm_mul_ps(dy, my)), _mm_mul_ps(dz, mz));
-            const __m128 k = _mm_mul_ps(c1, dot);
-            ax = _mm_add_ps(ax, _mm_sub_ps(_mm_mul_ps(k, dx), _mm_mul_ps(c2, mx)));
-            ay = _mm_add_ps(ay, _mm_sub_ps(_mm_mul_ps(k, dy), _mm_mul_ps(c2, my)));
-            az = _mm_add_ps(az, _mm_sub_ps(_mm_mul_ps(k, dz), _mm_mul_ps(c2, mz)));
+            const __m128 k = _mm_mul_ps(c1, p.dot);
+            ax = _mm_add_ps(ax, _mm_sub_ps(_mm_mul_ps(k, p.dx), _mm_mul_ps(c2, p.mx)));
+            ay = _mm_add_ps(ay, _mm_sub_ps(_mm_mul_ps(k, p.dy), _mm_mul_ps(c2, p.my)));
+            az = _mm_add_ps(az, _mm_sub_ps(_mm_mul_ps(k, p.dz), _mm_mul_ps(c2, p.mz)));
         }
         alignas(16) float lx[4], ly[4], lz[4];
         _mm_store_ps(lx, ax);
@@ -102,23 +116,16 @@ inline void gradientKernel(const float t[3], const Sources& s, size_t b, size_t 
     size_t i = b;
 #ifdef FERRO_DIPOLE_SSE
     if (e - b >= 4) {
-        const __m128 tx = _mm_set1_ps(t[0]), ty = _mm_set1_ps(t[1]), tz = _mm_set1_ps(t[2]);
-        const __m128 one = _mm_set1_ps(1.0f), three = _mm_set1_ps(3.0f), five = _mm_set1_ps(5.0f),
-                     two = _mm_set1_ps(2.0f), minR2 = _mm_set1_ps(kMinR2);
+        const __m128 tv[3] = {_mm_set1_ps(t[0]), _mm_set1_ps(t[1]), _mm_set1_ps(t[2])};
+        const __m128 three = _mm_set1_ps(3.0f), five = _mm_set1_ps(5.0f), two = _mm_set1_ps(2.0f);
         __m128 a[6] = {_mm_setzero_ps(), _mm_setzero_ps(), _mm_setzero_ps(),
                        _mm_setzero_ps(), _mm_setzero_ps(), _mm_setzero_ps()};
         for (; i + 4 <= e; i += 4) {
-            const __m128 dx = _mm_sub_ps(tx, _mm_loadu_ps(s.x + i));
-            const __m128 dy = _mm_sub_ps(ty, _mm_loadu_ps(s.y + i));
-            const __m128 dz = _mm_sub_ps(tz, _mm_loadu_ps(s.z + i));
-            const __m128 r2 = _mm_add_ps(_mm_add_ps(_mm_mul_ps(dx, dx), _mm_mul_ps(dy, dy)), _mm_mul_ps(dz, dz));
-            const __m128 inv = _mm_div_ps(one, _mm_sqrt_ps(_mm_max_ps(r2, minR2)));
-            const __m128 inv2 = _mm_mul_ps(inv, inv);
-            __m128 c5 = _mm_mul_ps(three, _mm_mul_ps(_mm_mul_ps(inv2, inv2), inv)); // 3/r^5
-            if (Inside) c5 = _mm_andnot_ps(_mm_cmplt_ps(r2, _mm_loadu_ps(s.a2 + i)), c5);
-            const __m128 c7 = _mm_mul_ps(five, _mm_mul_ps(c5, inv2)); // 15/r^7 (0 inside)
-            const __m128 mx = _mm_loadu_ps(s.mx + i), my = _mm_loadu_ps(s.my + i), mz = _mm_loadu_ps(s.mz + i);
-            const __m128 dot = _mm_add_ps(_mm_add_ps(_mm_mul_ps(dx, mx), _mm_mul_ps(dy, my)), _mm_mul_ps(dz, mz));
+            const SourcePairs4 p(tv, s, i);
+            const __m128 dx = p.dx, dy = p.dy, dz = p.dz, mx = p.mx, my = p.my, mz = p.mz, dot = p.dot;
+            __m128 c5 = _mm_mul_ps(three, _mm_mul_ps(_mm_mul_ps(p.inv2, p.inv2), p.inv)); // 3/r^5
+            if (Inside) c5 = _mm_andnot_ps(_mm_cmplt_ps(p.r2, _mm_loadu_ps(s.a2 + i)), c5);
+            const __m128 c7 = _mm_mul_ps(five, _mm_mul_ps(c5, p.inv2)); // 15/r^7 (0 inside)
             const __m128 tt = _mm_mul_ps(c5, dot), u = _mm_mul_ps(c7, dot);
             const __m128 c52 = _mm_mul_ps(two, c5);
             a[0] = _mm_add_ps(a[0], _mm_sub_ps(_mm_add_ps(tt, _mm_mul_ps(c52, _mm_mul_ps(dx, mx))), _mm_mul_ps(u, _mm_mul_ps(dx, dx))));
@@ -167,6 +174,78 @@ inline void gradientKernel(const float t[3], const Sources& s, size_t b, size_t 
 // where rm = r.m, Qr = Q r, rQr = r.Qr, u_d = O_dbc r_b r_c, S = r.u. The truncation error
 // is O((rho/d)^3) relative, against O(rho/d) for a bare dipole at the same centre.
 constexpr int kCellFloats = 19; // m[3], Q[6] (xx yy zz xy xz yz), O[10] (xxx xxy xxz xyy xyz xzz yyy yyz yzz zzz)
+
+/// Raw moments of a cell's dipoles about the cell centre c, in the scaled units of the tree
+/// (lengths in mean particle radii, moments V M in scaled volume x A/m), double precision:
+///   m_a = sum_j m_j,a,   Q_ab = sum_j m_j,a s_j,b,   O_a(bc) = sum_j m_j,a s_j,b s_j,c
+/// with s_j = x_j - c. O is symmetric in (b, c): six numbers per a, pairs xx yy zz xy xz yz.
+/// Built bottom-up by DipoleTree::sumCellMoments: a leaf adds its particles (addDipole), a
+/// parent adds its children's moments moved to its own centre (addShifted); storeTraceFree
+/// then writes what the far-cell evaluations (cellField, cellGradient) read. All three are
+/// linear in the moments, so the tree operator stays linear in M.
+struct RawMoments {
+    double m[3] = {0, 0, 0};
+    double Q[9] = {0, 0, 0, 0, 0, 0, 0, 0, 0}; // Q[3 a + b]
+    double O[18] = {};                          // O[6 a + pair(b, c)]
+
+    /// Pair index k -> (b, c) of O's symmetric pair: xx yy zz xy xz yz.
+    static constexpr int kPairB[6] = {0, 1, 2, 0, 0, 1}, kPairC[6] = {0, 1, 2, 1, 2, 2};
+
+    /// Adds one dipole `dipole` at offset s = x_j - c from the centre.
+    void addDipole(const double dipole[3], const double s[3]) {
+        for (int a = 0; a < 3; ++a) m[a] += dipole[a];
+        for (int a = 0; a < 3; ++a)
+            for (int b = 0; b < 3; ++b) Q[3 * a + b] += dipole[a] * s[b];
+        for (int a = 0; a < 3; ++a)
+            for (int k = 0; k < 6; ++k) O[6 * a + k] += dipole[a] * s[kPairB[k]] * s[kPairC[k]];
+    }
+
+    /// Adds `child`, the raw moments of a sub-cell about its own centre c', moved to this
+    /// centre: s = c' - c (the binomial shift of the first and second moments).
+    void addShifted(const RawMoments& child, const double s[3]) {
+        const double* cm = child.m;
+        for (int a = 0; a < 3; ++a) m[a] += cm[a];
+        for (int a = 0; a < 3; ++a)
+            for (int b = 0; b < 3; ++b) Q[3 * a + b] += child.Q[3 * a + b] + cm[a] * s[b];
+        for (int a = 0; a < 3; ++a)
+            for (int k = 0; k < 6; ++k) {
+                const int b = kPairB[k], c = kPairC[k];
+                double v = cm[a] * s[b] * s[c];
+                v += child.O[6 * a + k] + child.Q[3 * a + b] * s[c] + child.Q[3 * a + c] * s[b];
+                O[6 * a + k] += v;
+            }
+    }
+
+    /// Writes the kCellFloats numbers a far cell is evaluated with: m (3), the symmetric
+    /// trace-free part of Q (6: xx yy zz xy xz yz) and of the fully symmetrized O (10: xxx
+    /// xxy xxz xyy xyz xzz yyy yyz yzz zzz). Only these act on the harmonic 1/r.
+    void storeTraceFree(float out[]) const {
+        for (int a = 0; a < 3; ++a) out[a] = float(m[a]);
+        const double tr = (Q[0] + Q[4] + Q[8]) / 3.0;
+        out[3] = float(Q[0] - tr);
+        out[4] = float(Q[4] - tr);
+        out[5] = float(Q[8] - tr);
+        out[6] = float(0.5 * (Q[1] + Q[3]));
+        out[7] = float(0.5 * (Q[2] + Q[6]));
+        out[8] = float(0.5 * (Q[5] + Q[7]));
+        // O_a(bc) -> fully symmetric, then trace-free: T_abc - (d_ab q_c + d_ac q_b + d_bc q_a)/5
+        auto pairIdx = [](int b, int c) {
+            if (b > c) std::swap(b, c);
+            return b == c ? b : (b == 0 ? (c == 1 ? 3 : 4) : 5);
+        };
+        auto raw3 = [&](int a, int b, int c) { return O[6 * a + pairIdx(b, c)]; };
+        auto sym3 = [&](int a, int b, int c) { return (raw3(a, b, c) + raw3(b, c, a) + raw3(c, a, b)) / 3.0; };
+        double q[3];
+        for (int a = 0; a < 3; ++a) q[a] = sym3(a, 0, 0) + sym3(a, 1, 1) + sym3(a, 2, 2);
+        static const int I3[10][3] = {{0, 0, 0}, {0, 0, 1}, {0, 0, 2}, {0, 1, 1}, {0, 1, 2},
+                                      {0, 2, 2}, {1, 1, 1}, {1, 1, 2}, {1, 2, 2}, {2, 2, 2}};
+        for (int k = 0; k < 10; ++k) {
+            const int a = I3[k][0], b = I3[k][1], c = I3[k][2];
+            const double t = sym3(a, b, c) - ((a == b) * q[c] + (a == c) * q[b] + (b == c) * q[a]) / 5.0;
+            out[9 + k] = float(t);
+        }
+    }
+};
 
 template <class T>
 struct CellTerms {
@@ -235,6 +314,30 @@ inline void cellGradient(const T& x, const T& y, const T& z, const T& inv, const
     }
 }
 
+// The two quantities the tree evaluates, so that one loop (farSum, cellSumD,
+// DipoleTree::treeSum) serves both: FieldTerm, H [A/m] (scaled moment / scaled length^3,
+// kOut = 3: x y z), and GradientTerm, dH_d/dx_e [A/m per scaled length] (kOut = 6: xx yy
+// zz xy xz yz).
+//   add(x, y, z, inv, mom, out): adds 4 pi times one far cell's contribution at offset
+//     r = (x, y, z) = target - centre, inv = 1/|r|, from the kCellFloats moments `mom`
+//     (RawMoments::storeTraceFree layout);
+//   addParticles(t, s, b, e, out): adds 4 pi times the exact sum of particles [b, e) of s at t.
+template <bool Gradient>
+struct TreeTerm {
+    static constexpr int kOut = Gradient ? 6 : 3;
+    template <class T>
+    static void add(const T& x, const T& y, const T& z, const T& inv, const T* mom, T* out) {
+        if constexpr (Gradient) cellGradient(x, y, z, inv, mom, mom + 3, mom + 9, out);
+        else cellField(x, y, z, inv, mom, mom + 3, mom + 9, out);
+    }
+    static void addParticles(const float t[3], const Sources& s, size_t b, size_t e, float* out) {
+        if constexpr (Gradient) gradientKernel<true>(t, s, b, e, out);
+        else fieldKernel<true>(t, s, b, e, out);
+    }
+};
+using FieldTerm = TreeTerm<false>;
+using GradientTerm = TreeTerm<true>;
+
 // Far-cell sums over a gathered buffer: 22 SoA arrays of `count` floats (centre x y z,
 // then the kCellFloats moments), 4 cells at a time.
 constexpr int kFarArrays = 3 + kCellFloats;
@@ -248,51 +351,39 @@ inline v4sf invSqrt4(v4sf r2) {
 inline float hsum(v4sf v) { return (v[0] + v[1]) + (v[2] + v[3]); }
 #endif
 
-inline void farField(const float t[3], const float* buf, size_t count, float h[3]) {
+/// Adds to out[Term::kOut] the sum (without 1/4pi) of Term over the `count` far cells in
+/// `buf` (gatherFar's layout) at target t, all in the tree's scaled float units. Four cells
+/// at a time with SSE, the rest one by one; the order of the sum is fixed.
+template <class Term>
+inline void farSum(const float t[3], const float* buf, size_t count, float out[]) {
     size_t i = 0;
 #ifdef FERRO_DIPOLE_SSE
-    v4sf acc[3] = {{0, 0, 0, 0}, {0, 0, 0, 0}, {0, 0, 0, 0}};
+    v4sf acc[Term::kOut] = {};
     for (; i + 4 <= count; i += 4) {
         const v4sf x = t[0] - load4(buf + i), y = t[1] - load4(buf + count + i), z = t[2] - load4(buf + 2 * count + i);
         v4sf mom[kCellFloats];
         for (int k = 0; k < kCellFloats; ++k) mom[k] = load4(buf + (3 + k) * count + i);
-        cellField(x, y, z, invSqrt4(x * x + y * y + z * z), mom, mom + 3, mom + 9, acc);
+        Term::add(x, y, z, invSqrt4(x * x + y * y + z * z), mom, acc);
     }
-    for (int d = 0; d < 3; ++d) h[d] += hsum(acc[d]);
+    for (int d = 0; d < Term::kOut; ++d) out[d] += hsum(acc[d]);
 #endif
     for (; i < count; ++i) {
         const float x = t[0] - buf[i], y = t[1] - buf[count + i], z = t[2] - buf[2 * count + i];
         float mom[kCellFloats];
         for (int k = 0; k < kCellFloats; ++k) mom[k] = buf[(3 + k) * count + i];
-        cellField(x, y, z, 1.0f / std::sqrt(std::max(x * x + y * y + z * z, kMinR2)), mom, mom + 3, mom + 9, h);
+        Term::add(x, y, z, 1.0f / std::sqrt(std::max(x * x + y * y + z * z, kMinR2)), mom, out);
     }
 }
 
-inline void farGradient(const float t[3], const float* buf, size_t count, float g[6]) {
-    size_t i = 0;
-#ifdef FERRO_DIPOLE_SSE
-    v4sf acc[6] = {};
-    for (; i + 4 <= count; i += 4) {
-        const v4sf x = t[0] - load4(buf + i), y = t[1] - load4(buf + count + i), z = t[2] - load4(buf + 2 * count + i);
-        v4sf mom[kCellFloats];
-        for (int k = 0; k < kCellFloats; ++k) mom[k] = load4(buf + (3 + k) * count + i);
-        cellGradient(x, y, z, invSqrt4(x * x + y * y + z * z), mom, mom + 3, mom + 9, acc);
-    }
-    for (int d = 0; d < 6; ++d) g[d] += hsum(acc[d]);
-#endif
-    for (; i < count; ++i) {
-        const float x = t[0] - buf[i], y = t[1] - buf[count + i], z = t[2] - buf[2 * count + i];
-        float mom[kCellFloats];
-        for (int k = 0; k < kCellFloats; ++k) mom[k] = buf[(3 + k) * count + i];
-        cellGradient(x, y, z, 1.0f / std::sqrt(std::max(x * x + y * y + z * z, kMinR2)), mom, mom + 3, mom + 9, g);
-    }
-}
-
-Mat3f symmetric(const float g[6], float s) {
-    Mat3f J;
+/// Symmetric 3x3 matrix of g = xx yy zz xy xz yz.
+template <class T>
+Eigen::Matrix<T, 3, 3> symmetricMatrix(const T g[6]) {
+    Eigen::Matrix<T, 3, 3> J;
     J << g[0], g[3], g[4], g[3], g[1], g[5], g[4], g[5], g[2];
-    return s * J;
+    return J;
 }
+
+Mat3f symmetric(const float g[6], float s) { return s * symmetricMatrix(g); }
 
 // Morton code: 21 bits per axis interleaved.
 uint64_t spread21(uint64_t v) {
@@ -574,81 +665,33 @@ void DipoleTree::setMagnetizationUnsorted(const std::vector<Vec3>& M) {
 }
 
 void DipoleTree::sumCellMoments() {
-    // Raw moments about each cell's centre (m 3, Q_ab 9, O_a(bc) 6 per a), bottom-up:
-    // leaves from their particles, parents by shifting their children's moments (children
-    // have larger indices than their parent: one backward sweep). Then the symmetric
-    // trace-free parts go to cell_.
+    // Raw moments about each cell's centre, bottom-up: leaves from their particles, parents
+    // by shifting their children's moments (children have larger indices than their parent:
+    // one backward sweep). Then the symmetric trace-free parts go to cell_.
     const size_t nn = nodes_.size();
-    constexpr int kRaw = 3 + 9 + 18;
-    std::vector<double> raw(nn * kRaw, 0.0);
-    static const int B[6] = {0, 1, 2, 0, 0, 1}, C[6] = {0, 1, 2, 1, 2, 2};
-    auto addShifted = [](double* R, const double m[3], const double* Q, const double* O, const double s[3]) {
-        // moments of the offsets s_j + s, given those (Q, O) about s_j's own origin
-        for (int a = 0; a < 3; ++a) R[a] += m[a];
-        for (int a = 0; a < 3; ++a)
-            for (int b = 0; b < 3; ++b) R[3 + 3 * a + b] += (Q ? Q[3 * a + b] : 0.0) + m[a] * s[b];
-        for (int a = 0; a < 3; ++a)
-            for (int k = 0; k < 6; ++k) {
-                const int b = B[k], c = C[k];
-                double v = m[a] * s[b] * s[c];
-                if (Q) v += O[6 * a + k] + Q[3 * a + b] * s[c] + Q[3 * a + c] * s[b];
-                R[12 + 6 * a + k] += v;
-            }
-    };
-    auto leafMoments = [&](size_t i) {
-        const Node& node = nodes_[i];
-        double* R = &raw[i * kRaw];
-        for (uint32_t k = node.begin; k < node.end; ++k) {
-            const double m[3] = {mx_[k], my_[k], mz_[k]};
-            const double sft[3] = {px_[k] - double(node.c[0]), py_[k] - double(node.c[1]), pz_[k] - double(node.c[2])};
-            addShifted(R, m, nullptr, nullptr, sft);
-        }
-    };
+    std::vector<RawMoments> raw(nn);
     tbb::parallel_for(tbb::blocked_range<size_t>(0, leaves_.size(), 64), [&](const tbb::blocked_range<size_t>& r) {
-        for (size_t l = r.begin(); l < r.end(); ++l) leafMoments(leaves_[l]);
+        for (size_t l = r.begin(); l < r.end(); ++l) {
+            const Node& node = nodes_[leaves_[l]];
+            RawMoments& R = raw[leaves_[l]];
+            for (uint32_t k = node.begin; k < node.end; ++k) {
+                const double m[3] = {mx_[k], my_[k], mz_[k]};
+                const double s[3] = {px_[k] - double(node.c[0]), py_[k] - double(node.c[1]),
+                                     pz_[k] - double(node.c[2])};
+                R.addDipole(m, s);
+            }
+        }
     });
     for (size_t i = nn; i-- > 0;) {
         const Node& node = nodes_[i];
-        if (node.childCount == 0) continue;
-        double* R = &raw[i * kRaw];
         for (uint32_t ch = node.firstChild; ch < node.firstChild + node.childCount; ++ch) {
-            const double* RC = &raw[ch * kRaw];
-            const double sft[3] = {double(nodes_[ch].c[0]) - node.c[0], double(nodes_[ch].c[1]) - node.c[1],
-                                   double(nodes_[ch].c[2]) - node.c[2]};
-            addShifted(R, RC, RC + 3, RC + 12, sft);
+            const double s[3] = {double(nodes_[ch].c[0]) - node.c[0], double(nodes_[ch].c[1]) - node.c[1],
+                                 double(nodes_[ch].c[2]) - node.c[2]};
+            raw[i].addShifted(raw[ch], s);
         }
     }
     tbb::parallel_for(tbb::blocked_range<size_t>(0, nn, 256), [&](const tbb::blocked_range<size_t>& r) {
-        for (size_t i = r.begin(); i < r.end(); ++i) {
-            const double* R = &raw[i * kRaw];
-            float* out = &cell_[i * kCellFloats];
-            for (int a = 0; a < 3; ++a) out[a] = float(R[a]);
-            const double* Q = R + 3;
-            const double tr = (Q[0] + Q[4] + Q[8]) / 3.0;
-            out[3] = float(Q[0] - tr);
-            out[4] = float(Q[4] - tr);
-            out[5] = float(Q[8] - tr);
-            out[6] = float(0.5 * (Q[1] + Q[3]));
-            out[7] = float(0.5 * (Q[2] + Q[6]));
-            out[8] = float(0.5 * (Q[5] + Q[7]));
-            // O_a(bc) -> fully symmetric, then trace-free: T_abc - (d_ab q_c + d_ac q_b + d_bc q_a)/5
-            const double* O = R + 12;
-            auto pairIdx = [](int b, int c) {
-                if (b > c) std::swap(b, c);
-                return b == c ? b : (b == 0 ? (c == 1 ? 3 : 4) : 5);
-            };
-            auto raw3 = [&](int a, int b, int c) { return O[6 * a + pairIdx(b, c)]; };
-            auto sym3 = [&](int a, int b, int c) { return (raw3(a, b, c) + raw3(b, c, a) + raw3(c, a, b)) / 3.0; };
-            double q[3];
-            for (int a = 0; a < 3; ++a) q[a] = sym3(a, 0, 0) + sym3(a, 1, 1) + sym3(a, 2, 2);
-            static const int I3[10][3] = {{0, 0, 0}, {0, 0, 1}, {0, 0, 2}, {0, 1, 1}, {0, 1, 2},
-                                          {0, 2, 2}, {1, 1, 1}, {1, 1, 2}, {1, 2, 2}, {2, 2, 2}};
-            for (int k = 0; k < 10; ++k) {
-                const int a = I3[k][0], b = I3[k][1], c = I3[k][2];
-                const double t = sym3(a, b, c) - ((a == b) * q[c] + (a == c) * q[b] + (b == c) * q[a]) / 5.0;
-                out[9 + k] = float(t);
-            }
-        }
+        for (size_t i = r.begin(); i < r.end(); ++i) raw[i].storeTraceFree(&cell_[i * kCellFloats]);
     });
 }
 
@@ -665,15 +708,33 @@ void DipoleTree::gatherFar(size_t leaf, std::vector<float>& buf, size_t& count) 
     }
 }
 
-void DipoleTree::treeFieldAt(size_t leaf, size_t k, const std::vector<float>& buf, size_t farCount,
-                             double h[3]) const {
+template <class Term>
+void DipoleTree::treeSum(size_t leaf, size_t k, const std::vector<float>& buf, size_t farCount, float* out) const {
     const float t[3] = {px_[k], py_[k], pz_[k]};
-    float acc[3] = {0, 0, 0};
-    farField(t, buf.data(), farCount, acc);
+    farSum<Term>(t, buf.data(), farCount, out);
     const Sources near{px_.data(), py_.data(), pz_.data(), mx_.data(), my_.data(), mz_.data(), a2_.data(),
                        ainv3_.data()};
     for (uint32_t q = nearStart_[leaf]; q < nearStart_[leaf + 1]; q += 2)
-        fieldKernel<true>(t, near, nearRanges_[q], nearRanges_[q + 1], acc);
+        Term::addParticles(t, near, nearRanges_[q], nearRanges_[q + 1], out);
+}
+
+template <class Visit>
+void DipoleTree::forEachTreeTarget(Visit&& visit) const {
+    tbb::parallel_for(tbb::blocked_range<size_t>(0, leaves_.size(), 4), [&](const tbb::blocked_range<size_t>& r) {
+        std::vector<float> buf;
+        for (size_t l = r.begin(); l < r.end(); ++l) {
+            size_t farCount = 0;
+            gatherFar(l, buf, farCount);
+            const Node& node = nodes_[leaves_[l]];
+            for (uint32_t k = node.begin; k < node.end; ++k) visit(l, k, buf, farCount);
+        }
+    });
+}
+
+void DipoleTree::treeFieldAt(size_t leaf, size_t k, const std::vector<float>& buf, size_t farCount,
+                             double h[3]) const {
+    float acc[3] = {0, 0, 0};
+    treeSum<FieldTerm>(leaf, k, buf, farCount, acc);
     for (int a = 0; a < 3; ++a) h[a] = kInv4Pi * double(acc[a]);
 }
 
@@ -684,14 +745,8 @@ void DipoleTree::fieldAtParticles(Eigen::VectorXd& H, bool useTree) const {
     const Sources src{px_.data(), py_.data(), pz_.data(), mx_.data(), my_.data(), mz_.data(), a2_.data(),
                       ainv3_.data()};
     if (useTree && theta_ > 0) {
-        tbb::parallel_for(tbb::blocked_range<size_t>(0, leaves_.size(), 4), [&](const tbb::blocked_range<size_t>& r) {
-            std::vector<float> buf;
-            for (size_t l = r.begin(); l < r.end(); ++l) {
-                size_t farCount = 0;
-                gatherFar(l, buf, farCount);
-                const Node& node = nodes_[leaves_[l]];
-                for (uint32_t k = node.begin; k < node.end; ++k) treeFieldAt(l, k, buf, farCount, &H[3 * k]);
-            }
+        forEachTreeTarget([&](size_t l, size_t k, const std::vector<float>& buf, size_t farCount) {
+            treeFieldAt(l, k, buf, farCount, &H[3 * k]);
         });
         return;
     }
@@ -738,21 +793,10 @@ void DipoleTree::gradientAtParticles(std::vector<Mat3f>& J, bool useTree) const 
     const Sources src{px_.data(), py_.data(), pz_.data(), mx_.data(), my_.data(), mz_.data(), a2_.data(),
                       ainv3_.data()};
     if (useTree && theta_ > 0) {
-        tbb::parallel_for(tbb::blocked_range<size_t>(0, leaves_.size(), 4), [&](const tbb::blocked_range<size_t>& r) {
-            std::vector<float> buf;
-            for (size_t l = r.begin(); l < r.end(); ++l) {
-                size_t fc = 0;
-                gatherFar(l, buf, fc);
-                const Node& node = nodes_[leaves_[l]];
-                for (uint32_t k = node.begin; k < node.end; ++k) {
-                    const float t[3] = {px_[k], py_[k], pz_[k]};
-                    float g[6] = {0, 0, 0, 0, 0, 0};
-                    farGradient(t, buf.data(), fc, g);
-                    for (uint32_t q = nearStart_[l]; q < nearStart_[l + 1]; q += 2)
-                        gradientKernel<true>(t, src, nearRanges_[q], nearRanges_[q + 1], g);
-                    J[k] = symmetric(g, s);
-                }
-            }
+        forEachTreeTarget([&](size_t l, size_t k, const std::vector<float>& buf, size_t farCount) {
+            float g[6] = {0, 0, 0, 0, 0, 0};
+            treeSum<GradientTerm>(l, k, buf, farCount, g);
+            J[k] = symmetric(g, s);
         });
         return;
     }
@@ -822,41 +866,39 @@ inline void addDipoleGradientD(const double p[3], double sx, double sy, double s
          (5.0 * c5 * inv2 * dot) * (r * r.transpose());
 }
 
-void cellFieldD(const double p[3], const float c[3], const float* mom, double h[3]) {
+/// Adds to out[Term::kOut] Term (without 1/4pi) of one far cell with centre c and moments
+/// `mom` (cell_ layout) at the scaled point p, in double precision.
+template <class Term>
+void cellSumD(const double p[3], const float c[3], const float* mom, double out[]) {
     double m[kCellFloats];
     for (int k = 0; k < kCellFloats; ++k) m[k] = mom[k];
     const double x = p[0] - c[0], y = p[1] - c[1], z = p[2] - c[2];
-    cellField(x, y, z, 1.0 / std::sqrt(x * x + y * y + z * z), m, m + 3, m + 9, h);
+    Term::add(x, y, z, 1.0 / std::sqrt(x * x + y * y + z * z), m, out);
 }
 
-void cellGradientD(const double p[3], const float c[3], const float* mom, Mat3d& G) {
-    double m[kCellFloats];
-    for (int k = 0; k < kCellFloats; ++k) m[k] = mom[k];
-    const double x = p[0] - c[0], y = p[1] - c[1], z = p[2] - c[2];
-    double g[6] = {0, 0, 0, 0, 0, 0};
-    cellGradient(x, y, z, 1.0 / std::sqrt(x * x + y * y + z * z), m, m + 3, m + 9, g);
-    Mat3d J;
-    J << g[0], g[3], g[4], g[3], g[1], g[5], g[4], g[5], g[2];
-    G += J;
+/// Exact double sum (without 1/4pi) of the field of all particles `s` [0, n) at the scaled
+/// point p, in sorted order.
+Eigen::Vector3d directFieldD(const double p[3], const Sources& s, size_t n) {
+    double h[3] = {0, 0, 0};
+    for (size_t j = 0; j < n; ++j) addDipoleD(p, s.x[j], s.y[j], s.z[j], s.mx[j], s.my[j], s.mz[j], s.a2[j], s.ai3[j], h);
+    return Eigen::Vector3d(h[0], h[1], h[2]);
 }
 
 } // namespace
 
 Eigen::Vector3d DipoleTree::fieldAtParticleDirect(size_t k) const {
     const double p[3] = {px_[k], py_[k], pz_[k]};
-    double h[3] = {0, 0, 0};
-    for (size_t j = 0; j < size(); ++j)
-        addDipoleD(p, px_[j], py_[j], pz_[j], mx_[j], my_[j], mz_[j], a2_[j], ainv3_[j], h);
-    return kInv4Pi * Eigen::Vector3d(h[0], h[1], h[2]);
+    const Sources src{px_.data(), py_.data(), pz_.data(), mx_.data(), my_.data(), mz_.data(), a2_.data(),
+                      ainv3_.data()};
+    return kInv4Pi * directFieldD(p, src, size());
 }
 
 Eigen::Vector3d DipoleTree::fieldAtDirect(const Eigen::Vector3d& point) const {
     const Eigen::Vector3d q = (point - origin_) / scale_;
     const double p[3] = {q.x(), q.y(), q.z()};
-    double h[3] = {0, 0, 0};
-    for (size_t j = 0; j < size(); ++j)
-        addDipoleD(p, px_[j], py_[j], pz_[j], mx_[j], my_[j], mz_[j], a2_[j], ainv3_[j], h);
-    return kInv4Pi * Eigen::Vector3d(h[0], h[1], h[2]);
+    const Sources src{px_.data(), py_.data(), pz_.data(), mx_.data(), my_.data(), mz_.data(), a2_.data(),
+                      ainv3_.data()};
+    return kInv4Pi * directFieldD(p, src, size());
 }
 
 template <class Leaf, class Cell>
@@ -888,7 +930,7 @@ Eigen::Vector3d DipoleTree::fieldAt(const Eigen::Vector3d& point) const {
                 addDipoleD(p, px_[j], py_[j], pz_[j], mx_[j], my_[j], mz_[j], a2_[j], ainv3_[j], h);
         },
         [&](uint32_t c) {
-            cellFieldD(p, nodes_[c].c, &cell_[size_t(c) * kCellFloats], h);
+            cellSumD<FieldTerm>(p, nodes_[c].c, &cell_[size_t(c) * kCellFloats], h);
         });
     return kInv4Pi * Eigen::Vector3d(h[0], h[1], h[2]);
 }
@@ -904,7 +946,9 @@ Mat3d DipoleTree::gradientAt(const Eigen::Vector3d& point) const {
                 addDipoleGradientD(p, px_[j], py_[j], pz_[j], mx_[j], my_[j], mz_[j], a2_[j], G);
         },
         [&](uint32_t c) {
-            cellGradientD(p, nodes_[c].c, &cell_[size_t(c) * kCellFloats], G);
+            double g[6] = {0, 0, 0, 0, 0, 0};
+            cellSumD<GradientTerm>(p, nodes_[c].c, &cell_[size_t(c) * kCellFloats], g);
+            G += symmetricMatrix(g);
         });
     return (kInv4Pi / scale_) * G;
 }

@@ -114,6 +114,14 @@ private:
     void sumCellMoments();
     bool accept(const Node& cell, double d) const;
     void gatherFar(size_t leaf, std::vector<float>& buf, size_t& count) const;
+    // Adds Term (FieldTerm or GradientTerm in the .cpp, without 1/4pi, scaled units) at sorted
+    // particle k of `leaf`: its far cells (gathered in buf by gatherFar) plus its near particles.
+    template <class Term>
+    void treeSum(size_t leaf, size_t k, const std::vector<float>& buf, size_t farCount, float* out) const;
+    // Calls visit(leaf, k, buf, farCount) for every sorted particle k, leaves in parallel, each
+    // leaf's far cells gathered once.
+    template <class Visit>
+    void forEachTreeTarget(Visit&& visit) const;
     void treeFieldAt(size_t leaf, size_t k, const std::vector<float>& buf, size_t farCount, double h[3]) const;
     template <class Leaf, class Cell>
     void traverse(const Eigen::Vector3d& q, Leaf&& leaf, Cell&& cell) const;
