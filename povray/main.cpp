@@ -1,17 +1,16 @@
 // ferro-pov: exports meshes as POV-Ray includes plus the shot's master scene, .ini files and
 // look template. Parses arguments and calls the ferro_pov library; nothing else lives here.
 #include "povray/PovExport.hpp"
+#include "sim/CommandLine.hpp"
 #include "sim/ParticleFile.hpp"
 #include "sim/SceneFile.hpp"
 #include "sim/ShotRunner.hpp"
 #include "surface/ErrorText.hpp"
 
 #include <CLI/CLI.hpp>
-#include <tbb/global_control.h>
 #include <tbb/parallel_for.h>
 
 #include <iostream>
-#include <memory>
 
 namespace {
 
@@ -50,13 +49,20 @@ int main(int argc, char** argv)
     app.add_option("--shot-frames", shotFramesText, "frame range of shot.ini (default: the whole shot, 0 .. duration*fps)");
     app.add_flag("--no-shot", noShot, "write only the frame includes, not shot.pov, the .ini files or look.inc");
     app.add_flag("--force-template", forceTemplate, "overwrite look.inc with a fresh template (discards edits)");
-    app.add_option("--set", overrides, "override a scene key: --set render.width=320")->type_name("KEY=VALUE");
-    app.add_option("--threads", threads, "worker threads for a frame range (0 = all cores)")->check(CLI::NonNegativeNumber);
+    addSetOption(app, overrides, "override a scene key: --set render.width=320");
+    addThreadsOption(app, threads, "worker threads for a frame range (0 = all cores)");
     app.add_flag("--quiet,-q", quiet, "no progress lines on stderr");
 
-    std::pair<int, int> frames{-1, -1}, shotFrames{-1, -1};
-    try {
-        app.parse(argc, argv);
+    const std::vector<ErrorExit> errors = {
+        exitOn<SceneError>(kExitBadInput),
+        exitOn<MeshFileError>(kExitBadInput),
+        exitOn<PovInputMissing>(kExitIoError),
+        exitOn<PovExportError>(kExitIoError),
+        exitOn<std::exception>(kExitFailure, "", oneLine),
+    };
+    return runCommandLine("ferro-pov", app, argc, argv, errors, [&] {
+        // Checks CLI11 cannot express: reported like its own parse errors.
+        std::pair<int, int> frames{-1, -1}, shotFrames{-1, -1};
         if (!framesText.empty())
             frames = parseRange(framesText, "--frames");
         if (!shotFramesText.empty())
@@ -65,17 +71,8 @@ int main(int argc, char** argv)
             throw CLI::ValidationError("--frames", "needs a mesh pattern");
         if (framesText.empty() && input.empty() && noShot)
             throw CLI::ValidationError("--no-shot", "without a mesh there is nothing to write");
-    } catch (const CLI::CallForHelp& e) {
-        return app.exit(e);
-    } catch (const CLI::ParseError& e) {
-        std::cerr << "ferro-pov: error: " << e.what() << " (see --help)\n";
-        return kExitBadInput;
-    }
 
-    try {
-        std::unique_ptr<tbb::global_control> limit;
-        if (threads > 0)
-            limit = std::make_unique<tbb::global_control>(tbb::global_control::max_allowed_parallelism, size_t(threads));
+        const auto limit = limitThreads(threads);
         const SceneDocument doc = SceneDocument::load(scenePath, overrides);
         const PovExporter exporter(doc, outDir, shotFrames.first, shotFrames.second);
         if (!input.empty() && frames.first >= 0) {
@@ -110,21 +107,6 @@ int main(int argc, char** argv)
         }
         if (!noShot && exporter.writeShotFiles(forceTemplate) && !quiet)
             std::cerr << "ferro-pov: wrote the look template " << outDir << "/look.inc\n";
-    } catch (const SceneError& e) {
-        std::cerr << "ferro-pov: error: " << e.what() << "\n";
-        return kExitBadInput;
-    } catch (const MeshFileError& e) {
-        std::cerr << "ferro-pov: error: " << e.what() << "\n";
-        return kExitBadInput;
-    } catch (const PovInputMissing& e) {
-        std::cerr << "ferro-pov: error: " << e.what() << "\n";
-        return kExitIoError;
-    } catch (const PovExportError& e) {
-        std::cerr << "ferro-pov: error: " << e.what() << "\n";
-        return kExitIoError;
-    } catch (const std::exception& e) {
-        std::cerr << "ferro-pov: error: " << oneLine(e.what()) << "\n";
-        return kExitFailure;
-    }
-    return kExitOk;
+        return kExitOk;
+    });
 }

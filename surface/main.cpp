@@ -4,15 +4,14 @@
 #include "surface/SurfaceParams.hpp"
 #include "surface/SurfaceShot.hpp"
 
+#include "sim/CommandLine.hpp"
 #include "sim/ParticleFile.hpp"
 #include "sim/SceneFile.hpp"
 #include "sim/ShotRunner.hpp"
 
 #include <CLI/CLI.hpp>
-#include <tbb/global_control.h>
 
 #include <iostream>
-#include <memory>
 
 int main(int argc, char** argv) {
     using namespace ferro;
@@ -29,7 +28,7 @@ int main(int argc, char** argv) {
     app.add_option("--out,-o", run.output, "mesh file, or a pattern for --frames (PLY; others via --format)")->required();
     app.add_option("--frames", frames, "frame range A:B (inclusive): INPUT and --out are patterns")->type_name("A:B");
     app.add_option("--scene", scenePath, "scene file: parameters from its [surface] section");
-    app.add_option("--set", overrides, "override a scene key: --set surface.voxel_size=5e-4")->type_name("KEY=VALUE");
+    addSetOption(app, overrides, "override a scene key: --set surface.voxel_size=5e-4");
     app.add_option("--method", method, "anisotropic (Yu-Turk, default), isotropic (fastest, bumpier), or openvdb (ParticlesToLevelSet spheres, roughest)")
         ->check(CLI::IsMember({"anisotropic", "isotropic", "openvdb"}));
     app.add_option("--voxel-size", voxelSize, "voxel edge [m] (default: half the particle spacing)")
@@ -42,30 +41,21 @@ int main(int argc, char** argv) {
         ->check(CLI::Range(0, 100));
     app.add_option("--format", format, "mesh format: ply (default), obj, stl, ... (any assimp export id)");
     app.add_option("--vdb", run.vdb, "also write the level set as an OpenVDB .vdb file (a pattern for --frames)");
-    app.add_option("--threads", threads, "worker threads (default 0 = all cores)")->check(CLI::NonNegativeNumber);
+    addThreadsOption(app, threads, "worker threads (default 0 = all cores)");
     app.add_flag("--quiet,-q", run.quiet, "no progress lines");
-    try {
-        app.parse(argc, argv);
-    } catch (const CLI::CallForHelp& e) {
-        return app.exit(e);
-    } catch (const CLI::ParseError& e) {
-        std::cerr << "ferro-surface: error: " << e.what() << " (see --help)\n";
-        return kExitBadInput;
-    }
-    if (!frames.empty()) {
-        try {
-            const FrameRange range = parseFrameRange(frames);
+    const std::vector<ErrorExit> errors = {
+        exitOn<SceneError>(kExitBadInput),
+        // Internal failures (OpenVDB, out of memory, ...): their messages may span lines.
+        exitOn<std::exception>(kExitFailure, "", oneLine),
+    };
+    return runCommandLine("ferro-surface", app, argc, argv, errors, [&] {
+        if (!frames.empty()) {
+            const FrameRange range = frameRangeArgument("--frames", frames);
             run.firstFrame = range.first;
             run.lastFrame = range.last;
-        } catch (const std::invalid_argument& e) {
-            std::cerr << "ferro-surface: error: --frames " << e.what() << "\n";
-            return kExitBadInput;
+            run.range = true;
         }
-        run.range = true;
-    }
-
-    SurfaceParams params;
-    try {
+        SurfaceParams params;
         if (!scenePath.empty()) {
             const SceneDocument doc = SceneDocument::load(scenePath, overrides);
             doc.checkSections(knownSceneSections());
@@ -73,32 +63,21 @@ int main(int argc, char** argv) {
         } else if (!overrides.empty()) {
             params = parseSurfaceParams(SceneDocument::parse("", "--set", overrides));
         }
-    } catch (const SceneError& e) {
-        std::cerr << "ferro-surface: error: " << e.what() << "\n";
-        return kExitBadInput;
-    }
-    if (!method.empty())
-        params.method = method == "anisotropic" ? SurfaceMethod::Anisotropic
-                      : method == "isotropic"   ? SurfaceMethod::Isotropic
-                                                : SurfaceMethod::OpenVdb;
-    if (voxelSize > 0) params.voxelSize = voxelSize;
-    if (kernelRadius > 0) {
-        // Yu-Turk's neighbourhood follows the kernel (r_i = 2h, our default 2.75 / 1.5).
-        params.neighborRadius *= kernelRadius / params.kernelRadius;
-        params.kernelRadius = kernelRadius;
-    }
-    if (adaptivity >= 0) params.adaptivity = adaptivity;
-    if (smoothing >= 0) params.smoothing = smoothing;
-    if (!format.empty()) params.format = format;
+        if (!method.empty())
+            params.method = method == "anisotropic" ? SurfaceMethod::Anisotropic
+                          : method == "isotropic"   ? SurfaceMethod::Isotropic
+                                                    : SurfaceMethod::OpenVdb;
+        if (voxelSize > 0) params.voxelSize = voxelSize;
+        if (kernelRadius > 0) {
+            // Yu-Turk's neighbourhood follows the kernel (r_i = 2h, our default 2.75 / 1.5).
+            params.neighborRadius *= kernelRadius / params.kernelRadius;
+            params.kernelRadius = kernelRadius;
+        }
+        if (adaptivity >= 0) params.adaptivity = adaptivity;
+        if (smoothing >= 0) params.smoothing = smoothing;
+        if (!format.empty()) params.format = format;
 
-    std::unique_ptr<tbb::global_control> limit;
-    if (threads > 0)
-        limit = std::make_unique<tbb::global_control>(tbb::global_control::max_allowed_parallelism, size_t(threads));
-    try {
+        const auto limit = limitThreads(threads);
         return runSurface(run, params, std::cerr, std::cerr);
-    } catch (const std::exception& e) {
-        // Internal failures (OpenVDB, out of memory, ...): their messages may span lines.
-        std::cerr << "ferro-surface: error: " << oneLine(e.what()) << "\n";
-        return kExitFailure;
-    }
+    });
 }
