@@ -579,8 +579,9 @@ double FluidSimulation::chooseTimeStep(double dtLimit) const {
     return dt;
 }
 
-template <bool kStoredGradients>
-void FluidSimulation::accelerationSweep(const Real* pOverRho2) {
+void FluidSimulation::computeAccelerations(const Real* pOverRho2) {
+    // One sweep a step, for every solver: the kernel is evaluated here (four pairs at a
+    // time), which is cheaper than loading the gradients DFSPH stores for its iterations.
     const size_t n = x_.size();
     const Vec3 g = scene_.solver.gravity.cast<Real>();
     const Real V = Real(volume_);
@@ -591,12 +592,6 @@ void FluidSimulation::accelerationSweep(const Real* pOverRho2) {
     const Real eps2 = Real(0.01 * h_ * h_);
     const bool tension = gamma_ > 0;
     const bool pressure = pOverRho2 != nullptr;
-    // grad_i W of slot k of particle i, at offset xij with |xij|^2 = r2: stored by the
-    // search (DFSPH) or evaluated here (WCSPH sweeps each list once a step).
-    auto gradient = [&](const NeighborLists& lists, uint32_t k, const Vec3& xij, Real r2) -> Vec3 {
-        if constexpr (kStoredGradients) return lists.gradW[k];
-        else return kernel_.gradWBlended(xij, std::sqrt(r2));
-    };
     if (tension) {
         // Akinci 2013 surface normals n_i = h sum_j (m / rho_j) grad W_ij.
         normal_.resize(n);
@@ -608,7 +603,7 @@ void FluidSimulation::accelerationSweep(const Real* pOverRho2) {
             uint32_t k = fluidNbr_.begin(i);
             const uint32_t end = fluidNbr_.end(i);
 #if defined(__SSE2__)
-            if constexpr (!kStoredGradients) {
+            {
                 const __m128 rho04 = _mm_set1_ps(rho0);
                 __m128 sx = _mm_setzero_ps(), sy = _mm_setzero_ps(), sz = _mm_setzero_ps();
                 for (; k + 4 <= end; k += 4) {
@@ -626,7 +621,7 @@ void FluidSimulation::accelerationSweep(const Real* pOverRho2) {
             for (; k < end; ++k) {
                 const uint32_t j = fluidNbr_.index[k];
                 const Vec3 xij = x_[i] - x_[j];
-                sum += (rho0 / rho_[j]) * gradient(fluidNbr_, k, xij, xij.squaredNorm());
+                sum += (rho0 / rho_[j]) * kernel_.gradWBlended(xij, xij.norm());
             }
             normal_[i] = Real(h_) * V * sum;
         });
@@ -651,8 +646,8 @@ void FluidSimulation::accelerationSweep(const Real* pOverRho2) {
         uint32_t k = fluidNbr_.begin(i);
         const uint32_t end = fluidNbr_.end(i);
 #if defined(__SSE2__)
-        if constexpr (!kStoredGradients) {
-            // Four pairs at a time; the kernel gradient is evaluated here, not loaded.
+        {
+            // Four pairs at a time.
             const __m128 vx4 = _mm_set1_ps(vi.x()), vy4 = _mm_set1_ps(vi.y()), vz4 = _mm_set1_ps(vi.z());
             const __m128 rhoi4 = _mm_set1_ps(rhoi), pm4 = _mm_set1_ps(pi), m4 = _mm_set1_ps(m);
             const __m128 visc4 = _mm_set1_ps(viscosityScale), eps4 = _mm_set1_ps(eps2);
@@ -711,8 +706,7 @@ void FluidSimulation::accelerationSweep(const Real* pOverRho2) {
             Real c = 0;
             if (pressure) c -= m * (pi + pOverRho2[j]);
             if (nu > 0) c += viscosityScale * (vi - v_[j]).dot(xij) / ((rhoi + rho_[j]) * (r2 + eps2));
-            if constexpr (kStoredGradients) acc += c * fluidNbr_.gradW[k];
-            else acc += (c * kernel_.gradWFactor(std::sqrt(r2))) * xij;
+            acc += (c * kernel_.gradWFactor(std::sqrt(r2))) * xij;
             if (tension) {
                 // Cohesion pulls neighbours to about one spacing, curvature flattens the
                 // surface; K_ij boosts the force where a particle lacks neighbours.
@@ -728,7 +722,7 @@ void FluidSimulation::accelerationSweep(const Real* pOverRho2) {
                 const uint32_t b = boundaryNbr_.index[k];
                 const Vec3 xib = xi - bx_[b];
                 const Real r2 = xib.squaredNorm();
-                const Vec3 grad = gradient(boundaryNbr_, k, xib, r2);
+                const Vec3 grad = kernel_.gradWBlended(xib, std::sqrt(r2));
                 // Walls push with the fluid particle's own pressure (Akinci 2012).
                 if (pressure) acc -= (kWallMirror * rho0 * bVolume_[b] * pi) * grad;
                 if (nuWall > 0) acc += (10 * nuWall * bVolume_[b] * rho0 / rho_[i] * vi.dot(xib) / (r2 + eps2)) * grad;
@@ -736,11 +730,6 @@ void FluidSimulation::accelerationSweep(const Real* pOverRho2) {
         }
         a_[i] = acc;
     });
-}
-
-void FluidSimulation::computeAccelerations(const Real* pOverRho2) {
-    if (storeGradients_) accelerationSweep<true>(pOverRho2);
-    else accelerationSweep<false>(pOverRho2);
     if (magnetics_) magnetics_->addKelvinAcceleration(a_);
 }
 
@@ -790,7 +779,6 @@ int FluidSimulation::relaxedJacobi(std::vector<Real>& kappa, const std::vector<R
     // (A kappa)_i = hPow * sum_j V (a_i - a_j) . grad W_ij is the density change the
     // pressure accelerations cause. Stops when the mean residual is below eta.
     const size_t n = x_.size();
-    const Real V = Real(volume_);
     const Real hp = Real(hPow), invHp = Real(1 / hPow);
     std::vector<Real>& residual = residual_;
     residual.resize(n);
@@ -799,14 +787,7 @@ int FluidSimulation::relaxedJacobi(std::vector<Real>& kappa, const std::vector<R
     for (; it < scene_.solver.maxIterations; ++it) {
         pressureAccelerations(kappa);
         forEachParticle(n, [&](size_t i) {
-            const Vec3 ai = a_[i];
-            Real Ap = 0;
-            for (uint32_t k = fluidNbr_.begin(i); k < fluidNbr_.end(i); ++k)
-                Ap += (ai - a_[fluidNbr_.index[k]]).dot(fluidNbr_.gradW[k]);
-            Ap *= V;
-            for (uint32_t k = boundaryNbr_.begin(i); k < boundaryNbr_.end(i); ++k)
-                Ap += bVolume_[boundaryNbr_.index[k]] * ai.dot(boundaryNbr_.gradW[k]);
-            Ap *= hp;
+            const Real Ap = hp * divergence(i, a_);
             const Real r = source[i] - Ap;
             kappa[i] = std::max(kappa[i] - Real(0.5) * r * alpha_[i] * invHp, Real(0));
             // Sparse particles (near the free surface) do not count toward divergence error.
@@ -823,16 +804,16 @@ int FluidSimulation::relaxedJacobi(std::vector<Real>& kappa, const std::vector<R
     return it;
 }
 
-Real FluidSimulation::densityRate(size_t i) const {
-    // D(rho / rho0)/Dt = sum_j V (v_i - v_j) . grad W_ij + sum_b V_b v_i . grad W_ib
-    // (walls are at rest).
-    Real rate = 0;
+Real FluidSimulation::divergence(size_t i, const std::vector<Vec3>& u) const {
+    // sum_j V (u_i - u_j) . grad W_ij + sum_b V_b u_i . grad W_ib (walls are at rest).
+    const Vec3 ui = u[i];
+    Real sum = 0;
     for (uint32_t k = fluidNbr_.begin(i); k < fluidNbr_.end(i); ++k)
-        rate += (v_[i] - v_[fluidNbr_.index[k]]).dot(fluidNbr_.gradW[k]);
-    rate *= Real(volume_);
+        sum += (ui - u[fluidNbr_.index[k]]).dot(fluidNbr_.gradW[k]);
+    sum *= Real(volume_);
     for (uint32_t k = boundaryNbr_.begin(i); k < boundaryNbr_.end(i); ++k)
-        rate += bVolume_[boundaryNbr_.index[k]] * v_[i].dot(boundaryNbr_.gradW[k]);
-    return rate;
+        sum += bVolume_[boundaryNbr_.index[k]] * ui.dot(boundaryNbr_.gradW[k]);
+    return sum;
 }
 
 uint32_t FluidSimulation::neighborCount(size_t i) const {
@@ -843,7 +824,7 @@ void FluidSimulation::solveDivergence(double dt) {
     const size_t n = x_.size();
     source_.resize(n);
     forEachParticle(n, [&](size_t i) {
-        Real div = densityRate(i);
+        Real div = divergence(i, v_);
         // Only compression is corrected, and not at the sparse free surface.
         if (neighborCount(i) < kDenseNeighborhood || div < 0) div = 0;
         source_[i] = -div;
@@ -866,7 +847,7 @@ void FluidSimulation::solveDensity(double dt) {
     source_.resize(n);
     forEachParticle(n, [&](size_t i) {
         // Predicted density; expansion is left alone (free surface).
-        const Real predicted = std::max(rho_[i] / rho0 + Real(dt) * densityRate(i), Real(1));
+        const Real predicted = std::max(rho_[i] / rho0 + Real(dt) * divergence(i, v_), Real(1));
         source_[i] = 1 - predicted;
         // Warm start from half the previous step's pressure (as SPlisHSPlasH does: a full
         // restart overshoots). Starting from the pressure, which every frame file stores,

@@ -112,8 +112,6 @@ private:
     /// a_ = gravity + viscosity + surface tension + Kelvin force, plus the WCSPH pressure
     /// force when `pOverRho2` (p / rho^2 per particle) is given: one sweep of the lists.
     void computeAccelerations(const Real* pOverRho2);
-    template <bool kStoredGradients>
-    void accelerationSweep(const Real* pOverRho2);
     double chooseTimeStep(double dtLimit) const;
     void stepWCSPH(double dt);
     void solveDivergence(double dt);
@@ -121,7 +119,9 @@ private:
     int relaxedJacobi(std::vector<Real>& kappa, const std::vector<Real>& source, double hPow,
                       double eta, int minIterations, bool densitySolve);
     void pressureAccelerations(const std::vector<Real>& kappa);
-    Real densityRate(size_t i) const;      ///< D(rho/rho0)/Dt from the current velocities [1/s]
+    /// sum_j V (u_i - u_j) . grad W_ij + sum_b V_b u_i . grad W_ib: D(rho/rho0)/Dt [1/s]
+    /// for u = velocities, the density change pressure accelerations cause for u = a.
+    Real divergence(size_t i, const std::vector<Vec3>& u) const;
     uint32_t neighborCount(size_t i) const; ///< fluid plus wall neighbours
     void integratePositions(double dt);
 
