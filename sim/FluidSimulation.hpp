@@ -4,10 +4,11 @@
 // larger steps, with Akinci 2012 boundary particles, viscosity, Akinci 2013 surface
 // tension, gravity and a CFL-adaptive time step.
 //
-// Particles live in (cell, id) order, re-sorted every step; ids are stable and all
-// exported data is in id order. A step is a pure function of the state at its start
-// (no parallel floating-point reductions whose order varies), so runs are repeatable
-// and resume bit-for-bit from a frame file.
+// Particles live in (cell, id) order, re-sorted at every neighbour search (every DFSPH
+// step; WCSPH keeps a Verlet skin and searches when it is used up) and at every frame
+// start; ids are stable and all exported data is in id order. A frame is a pure function
+// of the state at its start (no parallel floating-point reductions whose order varies),
+// so runs are repeatable and resume bit-for-bit from a frame file.
 #include "sim/Container.hpp"
 #include "sim/FluidMagnetics.hpp"
 #include "sim/Kernel.hpp"
