@@ -148,6 +148,11 @@ inline uint32_t gatherNeighbors(const SortedGrid& grid, const Real* px, const Re
 /// a[j[0..3]] in four lanes.
 inline __m128 gather4(const Real* a, const uint32_t* j) { return _mm_set_ps(a[j[3]], a[j[2]], a[j[1]], a[j[0]]); }
 
+/// Component c of v[j[0..3]] in four lanes.
+inline __m128 gather4(const Vec3* v, const uint32_t* j, int c) {
+    return _mm_set_ps(v[j[3]][c], v[j[2]][c], v[j[1]][c], v[j[0]][c]);
+}
+
 /// Offsets x_i - x_j to four points j (coordinates split into px, py, pz) and their squared
 /// lengths, for the loops that take four pairs at a time.
 struct PairOffsets4 {
@@ -505,7 +510,7 @@ void FluidSimulation::updateNeighbors() {
             out[cnt] = j;
             Real w;
             if (grad) kernel_.evaluate(d, r2, w, grad[cnt]);
-            else w = kernel_.WBlended(r2);
+            else w = kernel_.W(std::sqrt(r2));
             sum += (volume ? volume[j] : V) * w;
             cnt += uint32_t(r2 < h2);
         }
@@ -621,7 +626,7 @@ void FluidSimulation::computeAccelerations(const Real* pOverRho2) {
             for (; k < end; ++k) {
                 const uint32_t j = fluidNbr_.index[k];
                 const Vec3 xij = x_[i] - x_[j];
-                sum += (rho0 / rho_[j]) * kernel_.gradWBlended(xij, xij.norm());
+                sum += (rho0 / rho_[j]) * kernel_.gradW(xij, xij.norm());
             }
             normal_[i] = Real(h_) * V * sum;
         });
@@ -659,34 +664,34 @@ void FluidSimulation::computeAccelerations(const Real* pOverRho2) {
                 const uint32_t* j = &fluidNbr_.index[k];
                 const PairOffsets4 d(xi, px_.data(), py_.data(), pz_.data(), j);
                 const __m128 &dx = d.dx, &dy = d.dy, &dz = d.dz, &r2 = d.r2;
-                const __m128 sc = kernel4.gradFactor(_mm_sqrt_ps(r2));
+                const __m128 r = _mm_sqrt_ps(r2);
+                const __m128 sc = kernel4.gradFactor(r);
+                // rho_i + rho_j, used by viscosity and tension alike.
+                const __m128 rhoSum = _mm_add_ps(rhoi4, gather4(rho_.data(), j));
                 __m128 c = _mm_setzero_ps();
                 if (pressure) {
                     c = _mm_sub_ps(c, _mm_mul_ps(m4, _mm_add_ps(pm4, gather4(pOverRho2, j))));
                 }
                 if (nu > 0) {
-                    const Vec3 &v0 = v_[j[0]], &v1 = v_[j[1]], &v2 = v_[j[2]], &v3 = v_[j[3]];
-                    const __m128 dvx = _mm_sub_ps(vx4, _mm_set_ps(v3.x(), v2.x(), v1.x(), v0.x()));
-                    const __m128 dvy = _mm_sub_ps(vy4, _mm_set_ps(v3.y(), v2.y(), v1.y(), v0.y()));
-                    const __m128 dvz = _mm_sub_ps(vz4, _mm_set_ps(v3.z(), v2.z(), v1.z(), v0.z()));
+                    const __m128 dvx = _mm_sub_ps(vx4, gather4(v_.data(), j, 0));
+                    const __m128 dvy = _mm_sub_ps(vy4, gather4(v_.data(), j, 1));
+                    const __m128 dvz = _mm_sub_ps(vz4, gather4(v_.data(), j, 2));
                     const __m128 dvdx =
                         _mm_add_ps(_mm_add_ps(_mm_mul_ps(dvx, dx), _mm_mul_ps(dvy, dy)), _mm_mul_ps(dvz, dz));
-                    const __m128 den = _mm_mul_ps(_mm_add_ps(rhoi4, gather4(rho_.data(), j)), _mm_add_ps(r2, eps4));
+                    const __m128 den = _mm_mul_ps(rhoSum, _mm_add_ps(r2, eps4));
                     c = _mm_add_ps(c, _mm_div_ps(_mm_mul_ps(visc4, dvdx), den));
                 }
                 __m128 cs = _mm_mul_ps(c, sc);
                 if (tension) {
                     // Surface tension (see the scalar loop below): gamma K_ij (-(n_i - n_j)
                     // - w C(r) / r x_ij); the cohesion part joins the pair scalar.
-                    const __m128 gK = _mm_div_ps(gammaK4, _mm_add_ps(rhoi4, gather4(rho_.data(), j)));
-                    const __m128 r = _mm_sqrt_ps(r2);
+                    const __m128 gK = _mm_div_ps(gammaK4, rhoSum);
                     const __m128 coh = _mm_and_ps(_mm_cmpgt_ps(r, rMin4),
                                                   _mm_div_ps(_mm_mul_ps(cohesionScale4, cohesion4.C(r)), r));
                     cs = _mm_sub_ps(cs, _mm_mul_ps(gK, coh));
-                    const Vec3 &n0 = normal_[j[0]], &n1 = normal_[j[1]], &n2 = normal_[j[2]], &n3 = normal_[j[3]];
-                    tx = _mm_add_ps(tx, _mm_mul_ps(gK, _mm_set_ps(n3.x(), n2.x(), n1.x(), n0.x())));
-                    ty = _mm_add_ps(ty, _mm_mul_ps(gK, _mm_set_ps(n3.y(), n2.y(), n1.y(), n0.y())));
-                    tz = _mm_add_ps(tz, _mm_mul_ps(gK, _mm_set_ps(n3.z(), n2.z(), n1.z(), n0.z())));
+                    tx = _mm_add_ps(tx, _mm_mul_ps(gK, gather4(normal_.data(), j, 0)));
+                    ty = _mm_add_ps(ty, _mm_mul_ps(gK, gather4(normal_.data(), j, 1)));
+                    tz = _mm_add_ps(tz, _mm_mul_ps(gK, gather4(normal_.data(), j, 2)));
                     gKsum = _mm_add_ps(gKsum, gK);
                 }
                 ax = _mm_add_ps(ax, _mm_mul_ps(cs, dx));
@@ -722,7 +727,7 @@ void FluidSimulation::computeAccelerations(const Real* pOverRho2) {
                 const uint32_t b = boundaryNbr_.index[k];
                 const Vec3 xib = xi - bx_[b];
                 const Real r2 = xib.squaredNorm();
-                const Vec3 grad = kernel_.gradWBlended(xib, std::sqrt(r2));
+                const Vec3 grad = kernel_.gradW(xib, std::sqrt(r2));
                 // Walls push with the fluid particle's own pressure (Akinci 2012).
                 if (pressure) acc -= (kWallMirror * rho0 * bVolume_[b] * pi) * grad;
                 if (nuWall > 0) acc += (10 * nuWall * bVolume_[b] * rho0 / rho_[i] * vi.dot(xib) / (r2 + eps2)) * grad;

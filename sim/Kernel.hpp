@@ -25,63 +25,39 @@ public:
 
     Real radius() const { return h_; }
 
+    /// W(r), zero beyond the support. Both spline pieces are computed and one selected,
+    /// which compiles to a blend rather than a branch that mispredicts for a third of the
+    /// pairs (the loops evaluate it for every pair of every step); grouped as in
+    /// CubicSplineKernel4, so the scalar and four-lane paths round alike.
     Real W(Real r) const {
         const Real q = r * invH_;
-        if (q <= Real(0.5)) return k_ * (Real(6) * q * q * (q - 1) + 1);
-        if (q < 1) {
-            const Real f = 1 - q;
-            return k_ * 2 * f * f * f;
-        }
-        return 0;
+        const Real f = std::max(1 - q, Real(0));
+        const Real inner = Real(6) * (q * q) * (q - 1) + 1;
+        const Real outer = 2 * (f * (f * f));
+        return k_ * (q <= Real(0.5) ? inner : outer);
     }
     Real W0() const { return k_; }
 
-    /// Gradient with respect to x_i of W(|x_i - x_j|), given rij = x_i - x_j and r = |rij|.
-    /// Exactly antisymmetric in rij, which makes pairwise forces conserve momentum.
-    Vec3 gradW(const Vec3& rij, Real r) const {
-        const Real q = r * invH_;
-        if (r <= Real(1e-9) * h_ || q >= 1) return Vec3::Zero();
-        Real dWdq;
-        if (q <= Real(0.5)) dWdq = l_ * q * (Real(3) * q - 2);
-        else {
-            const Real f = 1 - q;
-            dWdq = -l_ * f * f;
-        }
-        return rij * (dWdq * invH_ / r);
-    }
-
-    /// Gradient for rij = x_i - x_j with r = |rij| (zero beyond the support): the two
-    /// spline pieces blended by selects instead of branches, since the force loops
-    /// evaluate it for every pair of every step.
-    Vec3 gradWBlended(const Vec3& rij, Real r) const { return rij * gradWFactor(r); }
-
-    /// The scalar s with grad W = s * rij (zero beyond the support and at r = 0). Both
-    /// spline pieces are computed and one is selected, which compiles to a blend, not a
-    /// branch that mispredicts for a third of the pairs.
+    /// The scalar s with grad_i W(|x_i - x_j|) = s (x_i - x_j), for r = |x_i - x_j| (zero
+    /// beyond the support and at r = 0); blended and grouped like W.
     Real gradWFactor(Real r) const {
         const Real q = r * invH_;
         const Real f = std::max(1 - q, Real(0));
-        // Grouped as in CubicSplineKernel4, so both paths round alike.
         const Real inner = l_ * (q * (Real(3) * q - 2));
         const Real outer = l_ * (0 - f * f);
         const Real dWdq = q <= Real(0.5) ? inner : outer;
         return r > Real(1e-9) * h_ ? dWdq * invH_ / r : Real(0);
     }
 
-    /// W for r2 = |rij|^2, zero beyond the support, without branches.
-    Real WBlended(Real r2) const {
-        const Real q = std::sqrt(r2) * invH_;
-        const Real f = std::max(1 - q, Real(0));
-        const Real inner = Real(6) * (q * q) * (q - 1) + 1;
-        const Real outer = 2 * (f * (f * f));
-        return k_ * (q <= Real(0.5) ? inner : outer);
-    }
+    /// Gradient with respect to x_i of W(|x_i - x_j|), given rij = x_i - x_j and r = |rij|.
+    /// Exactly antisymmetric in rij, which makes pairwise forces conserve momentum.
+    Vec3 gradW(const Vec3& rij, Real r) const { return rij * gradWFactor(r); }
 
-    /// W and its gradient together for rij = x_i - x_j with r2 = |rij|^2 (both zero
-    /// beyond the support).
+    /// W and its gradient together for rij = x_i - x_j with r2 = |rij|^2 (one square root).
     void evaluate(const Vec3& rij, Real r2, Real& w, Vec3& grad) const {
-        w = WBlended(r2);
-        grad = gradWBlended(rij, std::sqrt(r2));
+        const Real r = std::sqrt(r2);
+        w = W(r);
+        grad = gradW(rij, r);
     }
 
     Real invRadius() const { return invH_; }
@@ -123,7 +99,7 @@ private:
 static_assert(std::is_same<Real, float>::value, "the SSE kernels take four floats");
 
 /// The cubic spline for four distances at once (SSE2, part of every x86-64 CPU): the same
-/// formulas as CubicSplineKernel::WBlended and gradWFactor, lane by lane, for the loops
+/// formulas as CubicSplineKernel::W and gradWFactor, lane by lane, for the loops
 /// that sweep every pair of every step.
 class CubicSplineKernel4 {
 public:
