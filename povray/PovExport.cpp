@@ -1,9 +1,11 @@
 #include "povray/PovExport.hpp"
 
-#include "sim/AtomicFile.hpp"
-#include "sim/MagnetState.hpp"
-#include "sim/ParticleFile.hpp"
-#include "sim/SceneFile.hpp"
+#include "sim/core/AtomicFile.hpp"
+#include "sim/magnetics/MagnetState.hpp"
+#include "sim/core/ParticleFile.hpp"
+#include "sim/core/SceneDocument.hpp"
+#include "sim/magnetics/MagnetScene.hpp"
+#include "sim/scene/SimSceneFile.hpp"
 
 #include <algorithm>
 #include <charconv>

@@ -28,9 +28,9 @@
 // Every file is written atomically; shot.pov and the .ini files are only replaced when their
 // text changes, so re-exporting frames does not make finished renders look stale to make.
 #include "povray/RenderParams.hpp"
-#include "sim/MagnetField.hpp"
-#include "sim/SimParams.hpp"
-#include "surface/TriangleMesh.hpp"
+#include "sim/magnetics/MagnetField.hpp"
+#include "sim/scene/SimParams.hpp"
+#include "sim/core/TriangleMesh.hpp"
 
 #include <stdexcept>
 #include <string>

@@ -1,6 +1,6 @@
 #include "povray/RenderParams.hpp"
 
-#include "sim/SceneFile.hpp"
+#include "sim/core/SceneDocument.hpp"
 
 #include <climits>
 #include <cmath>

@@ -4,7 +4,7 @@
 // PovExport.hpp). Every default here is the documented default of the scene key
 // (examples/annotated.toml, [render]); the camera defaults frame examples/dish.toml's 10 cm
 // dish at the origin from the front, slightly above.
-#include "sim/Types.hpp"
+#include "sim/core/Types.hpp"
 
 namespace ferro {
 

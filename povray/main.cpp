@@ -1,11 +1,11 @@
 // ferro-pov: exports meshes as POV-Ray includes plus the shot's master scene, .ini files and
 // look template. Parses arguments and calls the ferro_pov library; nothing else lives here.
 #include "povray/PovExport.hpp"
-#include "sim/CommandLine.hpp"
-#include "sim/ParticleFile.hpp"
-#include "sim/SceneFile.hpp"
-#include "sim/ShotRunner.hpp"
-#include "surface/ErrorText.hpp"
+#include "sim/core/CommandLine.hpp"
+#include "sim/core/ParticleFile.hpp"
+#include "sim/core/SceneDocument.hpp"
+#include "sim/core/ExitCodes.hpp"
+#include "sim/core/ErrorText.hpp"
 
 #include <CLI/CLI.hpp>
 #include <tbb/parallel_for.h>

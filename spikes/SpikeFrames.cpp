@@ -1,9 +1,10 @@
 #include "spikes/SpikeFrames.hpp"
 
-#include "sim/MagnetState.hpp"
-#include "sim/MagnetizationSolver.hpp"
-#include "sim/ParticleFile.hpp"
-#include "sim/SceneFile.hpp"
+#include "sim/magnetics/MagnetState.hpp"
+#include "sim/magnetics/MagnetizationSolver.hpp"
+#include "sim/core/ParticleFile.hpp"
+#include "sim/core/SceneDocument.hpp"
+#include "sim/scene/SimSceneFile.hpp"
 
 #include <tbb/parallel_for.h>
 
@@ -137,7 +138,7 @@ SpikeInput loadSpikeInput(const SpikeScene& scene, const std::string& surfacePat
                 for (size_t i = 0; i < M.size(); ++i) in.particles.magnetization[i] = double(M[i].norm());
                 if (scene.params.particleField && in.particles.spacing > 0) {
                     // The magnetized particles' own field: each particle a sphere of its volume
-                    // m / rho = rho0 h^3 / rho (the simulator's model, sim/MagnetizationSolver.hpp).
+                    // m / rho = rho0 h^3 / rho (the simulator's model, sim/magnetics/MagnetizationSolver.hpp).
                     const int rho = particles.column("density");
                     const double h3 = std::pow(in.particles.spacing, 3);
                     std::vector<Real> volume(x.size(), Real(h3));

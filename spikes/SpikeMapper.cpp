@@ -1,7 +1,8 @@
 // The spike synthesis of SpikeMapper.hpp.
 #include "spikes/SpikeMapper.hpp"
+#include "sim/core/Constants.hpp"
 
-#include "sim/MagnetizationSolver.hpp"
+#include "sim/magnetics/MagnetizationSolver.hpp"
 #include "spikes/SurfaceGeometry.hpp"
 
 #include <Eigen/Dense>
@@ -16,7 +17,6 @@ namespace ferro {
 
 namespace {
 
-constexpr double kPi = 3.14159265358979323846;
 
 double smoothstep01(double x)
 {
@@ -97,7 +97,7 @@ Vec3d growthDirection(const Vec3d& H, const Vec3d& n, double maxTilt)
 {
     Vec3d dir = H.norm() > 0 ? Vec3d(H.normalized()) : n;
     if (dir.dot(n) < 0) dir = -dir;
-    const double cosMax = std::cos(maxTilt * 3.14159265358979323846 / 180.0);
+    const double cosMax = std::cos(maxTilt * kPi / 180.0);
     if (dir.dot(n) < cosMax) {
         Vec3d tangent = dir - dir.dot(n) * n;
         tangent = tangent.norm() > 0 ? Vec3d(tangent.normalized()) : Vec3d::Zero();

@@ -1,6 +1,6 @@
 #include "spikes/SpikeParams.hpp"
 
-#include "sim/SceneFile.hpp"
+#include "sim/core/SceneDocument.hpp"
 
 namespace ferro {
 

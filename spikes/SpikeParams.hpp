@@ -1,7 +1,7 @@
 #pragma once
 // [spikes]: parameters of the procedural Rosensweig spikes (paper section 4.3), SI units.
 // Every default here is the documented default of the scene key in examples/annotated.toml.
-#include "sim/Types.hpp"
+#include "sim/core/Types.hpp"
 
 namespace ferro {
 

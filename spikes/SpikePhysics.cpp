@@ -1,6 +1,7 @@
 #include "spikes/SpikePhysics.hpp"
+#include "sim/core/Constants.hpp"
 
-#include "sim/MagnetizationSolver.hpp"
+#include "sim/magnetics/MagnetizationSolver.hpp"
 
 #include <cmath>
 #include <limits>
@@ -8,7 +9,6 @@
 namespace ferro {
 
 namespace {
-constexpr double kPi = 3.14159265358979323846;
 
 /// |M| of `law` at field magnitude H (the simulator's Langevin law, one definition for all stages).
 double lawMagnetization(double H, const MagnetizationParams& law)

@@ -2,14 +2,15 @@
 // The physics behind the spikes: the fluid's magnetization law, the Cowley-Rosensweig
 // critical magnetization (paper eq. 16) and wavelength, and the hexagonal height field of
 // eq. 13. Pure functions, SI units.
-#include "sim/MagnetField.hpp"
-#include "sim/SimParams.hpp"
+#include "sim/magnetics/MagnetField.hpp"
+#include "sim/core/Constants.hpp"
+#include "sim/scene/SimParams.hpp"
 
 namespace ferro {
 
 
 // The fluid's law M(H) is the simulator's: langevinMagnetization / langevinSlope in
-// sim/MagnetizationSolver.hpp (paper eq. 5 with Langevin saturation).
+// sim/magnetics/MagnetizationSolver.hpp (paper eq. 5 with Langevin saturation).
 
 /// The threshold of the normal-field (Rosensweig) instability of a flat layer.
 struct CriticalMagnetization {
@@ -33,9 +34,9 @@ CriticalMagnetization criticalMagnetization(double deltaRho, double gravity, dou
 double criticalWavelength(double deltaRho, double gravity, double surfaceTension);
 
 /// Distance between neighbouring peaks of eq. 13 for wavenumber k: 4 pi / (sqrt(3) k).
-inline double tipSpacingForWavenumber(double k) { return 4.0 * 3.14159265358979323846 / (1.7320508075688772 * k); }
+inline double tipSpacingForWavenumber(double k) { return 4.0 * kPi / (1.7320508075688772 * k); }
 /// Inverse of tipSpacingForWavenumber.
-inline double wavenumberForTipSpacing(double l) { return 4.0 * 3.14159265358979323846 / (1.7320508075688772 * l); }
+inline double wavenumberForTipSpacing(double l) { return 4.0 * kPi / (1.7320508075688772 * l); }
 
 /// Eq. 13 divided by C0, in lattice coordinates: with e1 along eq. 13's x axis and e2 at
 /// 60 degrees from it, both of length l = 4 pi / (sqrt3 k), the point a e1 + b e2 has

@@ -2,7 +2,7 @@
 // face selection, and the closed / self-intersection checks.
 #include "spikes/SurfaceGeometry.hpp"
 
-#include "surface/ErrorText.hpp"
+#include "sim/core/ErrorText.hpp"
 
 #include <CGAL/AABB_traits.h>
 #include <CGAL/AABB_tree.h>

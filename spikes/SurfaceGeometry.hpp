@@ -1,7 +1,7 @@
 #pragma once
 // Geometry queries and mesh surgery on a TriangleMesh that ferro-spikes needs, all on CGAL.
 // CGAL stays inside SurfaceGeometry.cpp: this header includes none of it.
-#include "surface/TriangleMesh.hpp"
+#include "sim/core/TriangleMesh.hpp"
 
 #include <memory>
 #include <vector>

@@ -1,11 +1,11 @@
 // ferro-spikes: the paper's procedural Rosensweig spikes on a surface mesh, one frame or a range.
 // Parses arguments and calls the ferro_spikes library; nothing else lives here.
-#include "sim/CommandLine.hpp"
-#include "sim/ParticleFile.hpp"
-#include "sim/SceneFile.hpp"
-#include "sim/ShotRunner.hpp"
+#include "sim/core/CommandLine.hpp"
+#include "sim/core/ParticleFile.hpp"
+#include "sim/core/SceneDocument.hpp"
+#include "sim/core/ExitCodes.hpp"
 #include "spikes/SpikeFrames.hpp"
-#include "surface/ErrorText.hpp"
+#include "sim/core/ErrorText.hpp"
 
 #include <CLI/CLI.hpp>
 

@@ -1,7 +1,8 @@
 // Yu-Turk anisotropic and plain isotropic density kernels (see DensityKernels.hpp).
 #include "surface/DensityKernels.hpp"
+#include "sim/core/Constants.hpp"
 
-#include "sim/NeighborSearch.hpp"
+#include "sim/sph/NeighborSearch.hpp"
 
 #include <Eigen/Eigenvalues>
 #include <tbb/blocked_range.h>
@@ -19,7 +20,6 @@ namespace ferro {
 
 namespace {
 
-constexpr double kPi = 3.14159265358979323846;
 /// 1 / integral of (1 - u^2)^3 over the unit ball.
 constexpr double kSigma = 315.0 / (64.0 * kPi);
 

@@ -11,7 +11,7 @@
 // No OpenVDB here: the rasterizer (SurfaceExtractor.cpp) consumes these kernels.
 #include "surface/SurfaceParams.hpp"
 
-#include "sim/Types.hpp"
+#include "sim/core/Types.hpp"
 
 #include <vector>
 

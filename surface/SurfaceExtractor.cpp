@@ -3,7 +3,7 @@
 
 #include "surface/DensityKernels.hpp"
 
-#include "sim/AtomicFile.hpp"
+#include "sim/core/AtomicFile.hpp"
 
 #include <openvdb/openvdb.h>
 #include <openvdb/tools/FastSweeping.h>

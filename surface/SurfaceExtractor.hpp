@@ -8,9 +8,9 @@
 // openvdb::tools::ParticlesToLevelSet (spheres of one spacing radius).
 // OpenVDB stays inside SurfaceExtractor.cpp.
 #include "surface/SurfaceParams.hpp"
-#include "surface/TriangleMesh.hpp"
+#include "sim/core/TriangleMesh.hpp"
 
-#include "sim/Types.hpp"
+#include "sim/core/Types.hpp"
 
 #include <stdexcept>
 #include <string>

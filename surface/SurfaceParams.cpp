@@ -1,7 +1,7 @@
 // [surface] section of a scene file (see SurfaceParams.hpp).
 #include "surface/SurfaceParams.hpp"
 
-#include "sim/SceneFile.hpp"
+#include "sim/core/SceneDocument.hpp"
 
 namespace ferro {
 

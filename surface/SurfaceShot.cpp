@@ -1,8 +1,8 @@
 // One particle file -> one mesh file, and frame ranges (see SurfaceShot.hpp).
 #include "surface/SurfaceShot.hpp"
 
-#include "sim/ParticleFile.hpp"
-#include "sim/ShotRunner.hpp"
+#include "sim/core/ParticleFile.hpp"
+#include "sim/core/ExitCodes.hpp"
 
 #include <tbb/parallel_for.h>
 #include <tbb/tick_count.h>

@@ -1,13 +1,14 @@
 // ferro-surface: meshes particle files into fluid surfaces (Yu-Turk anisotropic kernels).
 // Parses arguments and calls the ferro_surface library; nothing else lives here.
-#include "surface/ErrorText.hpp"
+#include "sim/core/ErrorText.hpp"
 #include "surface/SurfaceParams.hpp"
 #include "surface/SurfaceShot.hpp"
 
-#include "sim/CommandLine.hpp"
-#include "sim/ParticleFile.hpp"
-#include "sim/SceneFile.hpp"
-#include "sim/ShotRunner.hpp"
+#include "sim/core/CommandLine.hpp"
+#include "sim/core/ParticleFile.hpp"
+#include "sim/core/SceneDocument.hpp"
+#include "sim/scene/SimSceneFile.hpp"
+#include "sim/core/ExitCodes.hpp"
 
 #include <CLI/CLI.hpp>
 
@@ -58,7 +59,7 @@ int main(int argc, char** argv) {
         SurfaceParams params;
         if (!scenePath.empty()) {
             const SceneDocument doc = SceneDocument::load(scenePath, overrides);
-            doc.checkSections(knownSceneSections());
+            doc.checkSections(shotSceneSections());
             params = parseSurfaceParams(doc);
         } else if (!overrides.empty()) {
             params = parseSurfaceParams(SceneDocument::parse("", "--set", overrides));

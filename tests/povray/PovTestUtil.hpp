@@ -1,7 +1,8 @@
 #pragma once
 // Helpers shared by the ferro-pov tests: scratch directories, shell commands, a UV sphere
 // built in memory, and a reader for the PPM images POV-Ray writes with +FP.
-#include "surface/TriangleMesh.hpp"
+#include "sim/core/TriangleMesh.hpp"
+#include "sim/core/Constants.hpp"
 #include "tests/TestUtil.hpp"
 
 #include <cmath>
@@ -42,7 +43,7 @@ inline fs::path freshDir(const std::string& name)
 inline TriangleMesh sphereMesh(const Vec3& center, float radius, int segments = 32, int rings = 16)
 {
     TriangleMesh m;
-    const double pi = 3.14159265358979323846;
+    const double pi = kPi;
     for (int j = 0; j <= rings; ++j) {
         const double th = pi * j / rings;
         for (int i = 0; i < segments; ++i) {

@@ -1,11 +1,13 @@
 // ferro-pov: number formatting, the z-up -> y-up conversion, mesh2 and magnet includes, the
 // shot files, and real renders with the povray binary (POV-Ray parses every file we write).
 #include "PovTestUtil.hpp"
+#include "sim/core/Constants.hpp"
 
 #include "povray/PovExport.hpp"
 #include "povray/RenderParams.hpp"
-#include "sim/MagnetState.hpp"
-#include "sim/SceneFile.hpp"
+#include "sim/magnetics/MagnetState.hpp"
+#include "sim/core/SceneDocument.hpp"
+#include "sim/magnetics/MagnetScene.hpp"
 
 #include <catch2/catch.hpp>
 #include <Eigen/Geometry>
@@ -52,7 +54,7 @@ std::pair<int, int> project(const RenderParams& r, const Vec3d& p, int width, in
     const Vec3d right = f.cross(Vec3d(0, 0, 1)).normalized(); // right-handed, z up
     const Vec3d up = right.cross(f);
     const Vec3d d = p - r.cameraPosition;
-    const double t = std::tan(r.cameraAngle * 3.14159265358979 / 360.0);
+    const double t = std::tan(r.cameraAngle * kPi / 360.0);
     const double aspect = double(width) / height;
     const double u = d.dot(right) / d.dot(f) / t;            // -1 .. 1 across the width
     const double v = d.dot(up) / d.dot(f) / (t / aspect);    // -1 .. 1 up the height

@@ -1,7 +1,8 @@
 #pragma once
 // Test and benchmark inputs for ferro-spikes: closed fluid bodies built directly, so the spike
 // tests do not depend on ferro-surface.
-#include "surface/TriangleMesh.hpp"
+#include "sim/core/TriangleMesh.hpp"
+#include "sim/core/Constants.hpp"
 
 #include <cmath>
 #include <functional>
@@ -15,7 +16,7 @@ namespace ferro::spiketest {
 inline TriangleMesh makePool(double R, int rings, const std::function<double(double, double)>& height,
                              const Vec3d& center = Vec3d::Zero())
 {
-    const double pi = 3.14159265358979323846;
+    const double pi = kPi;
     TriangleMesh mesh;
     auto ringStart = [](int k) { return k == 0 ? 0 : 1 + 3 * k * (k - 1); }; // first vertex of ring k
     const int perDisc = 1 + 3 * rings * (rings + 1);

@@ -1,9 +1,10 @@
 // ferro-spikes: the paper's hexagonal spikes on flat pools and in two-magnet fields, checked
 // against the analytic spacing, symmetry, field direction, eq. 16, volume and mesh health.
 #include "SpikeTestMeshes.hpp"
+#include "sim/core/Constants.hpp"
 
-#include "sim/MagnetizationSolver.hpp"
-#include "sim/SceneFile.hpp"
+#include "sim/magnetics/MagnetizationSolver.hpp"
+#include "sim/core/SceneDocument.hpp"
 #include "spikes/SpikeFrames.hpp"
 #include "spikes/SpikeMapper.hpp"
 #include "spikes/SurfaceGeometry.hpp"
@@ -21,7 +22,6 @@ using spiketest::makeFlatPool;
 
 namespace {
 
-constexpr double kPi = 3.14159265358979323846;
 constexpr double kDepth = 0.01;
 
 // A dish of radius R holding oil-based ferrofluid (chi0 1.5, Ms 35 kA/m), plus `extra` TOML.

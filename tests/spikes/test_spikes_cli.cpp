@@ -2,8 +2,8 @@
 // bad input is one line on stderr and exit code 2.
 #include "SpikeTestMeshes.hpp"
 
-#include "sim/ParticleFile.hpp"
-#include "sim/SceneFile.hpp"
+#include "sim/core/ParticleFile.hpp"
+#include "sim/core/SceneDocument.hpp"
 #include "spikes/SpikeFrames.hpp"
 #include "tests/TestUtil.hpp"
 

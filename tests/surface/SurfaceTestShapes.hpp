@@ -1,6 +1,6 @@
 #pragma once
 // Particle layouts with known surfaces for the surface tests and the benchmark.
-#include "sim/Types.hpp"
+#include "sim/core/Types.hpp"
 
 #include <cmath>
 #include <cstdint>

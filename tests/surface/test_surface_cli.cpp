@@ -1,8 +1,8 @@
 // ferro-surface as artists run it: single frames, ranges, --vdb, --format, scenes, bad input.
 #include "SurfaceTestShapes.hpp"
 
-#include "sim/ParticleFile.hpp"
-#include "surface/TriangleMesh.hpp"
+#include "sim/core/ParticleFile.hpp"
+#include "sim/core/TriangleMesh.hpp"
 #include "tests/TestUtil.hpp"
 
 #include <openvdb/openvdb.h>

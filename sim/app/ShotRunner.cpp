@@ -1,0 +1,214 @@
+#include "sim/app/ShotRunner.hpp"
+
+#include "sim/sph/FluidSimulation.hpp"
+#include "sim/magnetics/MagnetState.hpp"
+#include "sim/core/ParticleFile.hpp"
+#include "sim/core/SceneDocument.hpp"
+
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <filesystem>
+#include <iostream>
+#include <regex>
+#include <sstream>
+
+namespace fs = std::filesystem;
+
+namespace ferro {
+
+std::string particleFramePath(const std::string& dir, int frame) {
+    char name[64];
+    std::snprintf(name, sizeof name, "particles_%04d.ply", frame);
+    return (fs::path(dir) / name).string();
+}
+
+namespace {
+
+std::string formatSeconds(double s) {
+    std::ostringstream o;
+    if (s >= 3600) o << int(s / 3600) << "h" << int(std::fmod(s, 3600) / 60) << "m";
+    else if (s >= 60) o << int(s / 60) << "m" << int(std::fmod(s, 60)) << "s";
+    else o << int(std::ceil(s)) << "s";
+    return o.str();
+}
+
+/// Frame indices of complete-looking particle files in `dir` (sorted), removing
+/// temporary files that a killed writer left behind.
+std::vector<int> existingFrames(const std::string& dir) {
+    std::vector<int> frames;
+    if (!fs::is_directory(dir)) return frames;
+    static const std::regex frameName(R"(particles_(\d+)\.ply)");
+    static const std::regex tempName(R"(particles_\d+\.ply\.tmp-.*)");
+    for (const auto& e : fs::directory_iterator(dir)) {
+        const std::string name = e.path().filename().string();
+        std::smatch m;
+        if (std::regex_match(name, m, frameName)) frames.push_back(std::stoi(m[1]));
+        else if (std::regex_match(name, tempName)) fs::remove(e.path());
+    }
+    std::sort(frames.begin(), frames.end());
+    return frames;
+}
+
+std::string magnetSummary(const FluidSimulation& sim) {
+    const FluidMagnetics* fm = sim.magnetics();
+    if (!fm) return {};
+    std::ostringstream o;
+    o << ", " << sim.scene().magnets.size() << " magnet" << (sim.scene().magnets.size() == 1 ? "" : "s");
+    if (fm->magnetic()) o << ", chi0 " << fm->law().susceptibility << ", Ms " << fm->law().saturation << " A/m";
+    else o << " (fluid not magnetic: magnetization.susceptibility = 0)";
+    return o.str();
+}
+
+ParticleTable frameTable(const FluidSimulation& sim, int frame, const RunOptions& opt) {
+    ParticleTable t;
+    t.names = {"x", "y", "z", "vx", "vy", "vz", "density", "pressure", "hx", "hy", "hz", "mx", "my", "mz"};
+    const auto x = sim.positionsById();
+    const auto v = sim.velocitiesById();
+    const auto rho = sim.densitiesById();
+    const auto p = sim.pressuresById();
+    const auto H = sim.fieldById();
+    const auto M = sim.magnetizationById();
+    const size_t n = x.size();
+    t.values.resize(n * t.names.size());
+    for (size_t i = 0; i < n; ++i) {
+        float* row = &t.values[i * t.names.size()];
+        row[0] = x[i].x(); row[1] = x[i].y(); row[2] = x[i].z();
+        row[3] = v[i].x(); row[4] = v[i].y(); row[5] = v[i].z();
+        row[6] = rho[i];
+        row[7] = p[i];
+        row[8] = H[i].x(); row[9] = H[i].y(); row[10] = H[i].z();
+        row[11] = M[i].x(); row[12] = M[i].y(); row[13] = M[i].z();
+    }
+    auto num = [](double d) {
+        std::ostringstream o;
+        o.precision(17);
+        o << d;
+        return o.str();
+    };
+    t.setComment("ferro", "particles 1");
+    t.setComment("frame", std::to_string(frame));
+    t.setComment("time", num(sim.time()));
+    t.setComment("fps", num(sim.scene().shot.fps));
+    t.setComment("spacing", num(sim.spacing()));
+    t.setComment("support_radius", num(sim.supportRadius()));
+    t.setComment("particle_mass", num(sim.particleMass()));
+    t.setComment("rest_density", num(sim.restDensity()));
+    t.setComment("scene", sim.scene().path);
+    t.setComment("scene_fingerprint", opt.fingerprint);
+    // The magnets at this frame's time and the fluid's law: later stages evaluate the same
+    // field anywhere from the file alone.
+    writeMagnetComments(t, sim.magnetsNow(), &sim.scene().magnetization);
+    if (sim.magnetizationInterval() > 0)
+        t.setComment("magnetization_interval", std::to_string(sim.magnetizationInterval()));
+    return t;
+}
+
+} // namespace
+
+void runShot(const SimScene& scene, const RunOptions& opt) {
+    if (opt.outDir.empty()) throw SceneError("--out: an output directory is required");
+    std::error_code ec;
+    fs::create_directories(opt.outDir, ec);
+    if (ec) throw ParticleFileError(opt.outDir + ": cannot create directory: " + ec.message());
+
+    std::vector<int> frames = existingFrames(opt.outDir);
+    if (!frames.empty() && !opt.resume && !opt.overwrite)
+        throw SceneError(opt.outDir + ": already holds particle frames; pass --resume to continue or --overwrite to start over");
+    if (opt.overwrite && !opt.resume) {
+        for (int f : frames) fs::remove(particleFramePath(opt.outDir, f));
+        frames.clear();
+    }
+
+    FluidSimulation sim(scene);
+    const int lastFrame = opt.maxFrames >= 0 ? std::min(opt.maxFrames, scene.shot.frameCount()) : scene.shot.frameCount();
+    const double fps = scene.shot.fps;
+
+    int frame = 0;
+    bool resumed = false;
+    // Resume from the newest frame that reads back completely (writes are atomic, so
+    // normally the newest; a damaged file is skipped, never rewritten).
+    for (auto it = frames.rbegin(); opt.resume && it != frames.rend(); ++it) {
+        ParticleTable t;
+        try {
+            t = readParticleFile(particleFramePath(opt.outDir, *it));
+        } catch (const ParticleFileError& e) {
+            std::cerr << "ferro-sim: warning: skipping unreadable " << e.what() << "\n";
+            continue;
+        }
+        const std::string fp = t.comment("scene_fingerprint");
+        if (fp != opt.fingerprint)
+            throw SceneError(particleFramePath(opt.outDir, *it) +
+                             ": written from a different scene or --set overrides; resume with the same ones, or --overwrite");
+        if (t.rows() != sim.size())
+            throw SceneError(particleFramePath(opt.outDir, *it) + ": holds " + std::to_string(t.rows()) +
+                             " particles, the scene makes " + std::to_string(sim.size()));
+        std::vector<Real> pressure;
+        if (const int col = t.column("pressure"); col >= 0)
+            for (size_t i = 0; i < t.rows(); ++i) pressure.push_back(t.at(i, col));
+        std::vector<Vec3> H, M;
+        if (t.column("hx") >= 0 && t.column("mx") >= 0) {
+            H = t.vec3("hx", "hy", "hz");
+            M = t.vec3("mx", "my", "mz");
+        }
+        sim.setState(*it / fps, t.vec3("x", "y", "z"), t.vec3("vx", "vy", "vz"), pressure, H, M);
+        sim.setMagnetizationInterval(size_t(t.commentNumber("magnetization_interval", 0)));
+        frame = *it;
+        resumed = true;
+        break;
+    }
+    if (!resumed) {
+        if (opt.resume && !frames.empty())
+            throw ParticleFileError(opt.outDir + ": no readable particle frame to resume from");
+        writeParticleFile(particleFramePath(opt.outDir, 0), frameTable(sim, 0, opt));
+    }
+    if (!opt.quiet)
+        std::cerr << "ferro-sim: " << sim.size() << " particles, spacing " << sim.spacing() * 1e3 << " mm, "
+                  << sim.pressureSolverLabel() << ", "
+                  << sim.boundaryPositions().size() << " boundary particles"
+                  << magnetSummary(sim) << "; "
+                  << (resumed ? "resuming after frame " + std::to_string(frame) : std::string("starting"))
+                  << ", frames to " << lastFrame << "\n";
+
+    using Clock = std::chrono::steady_clock;
+    const auto start = Clock::now();
+    const size_t startSteps = sim.stepCount();
+    const int firstFrame = frame;
+    while (frame < lastFrame) {
+        ++frame;
+        const auto frameStart = Clock::now();
+        const size_t stepsBefore = sim.stepCount();
+        sim.resetMagneticsCounters();
+        sim.advanceTo(frame / fps);
+        writeParticleFile(particleFramePath(opt.outDir, frame), frameTable(sim, frame, opt));
+        if (!opt.quiet) {
+            const double now = std::chrono::duration<double>(Clock::now() - start).count();
+            const double frameSec = std::chrono::duration<double>(Clock::now() - frameStart).count();
+            const size_t steps = sim.stepCount() - stepsBefore;
+            const double eta = now / (frame - firstFrame) * (lastFrame - frame);
+            const StepStats& st = sim.lastStep();
+            std::string mag;
+            if (const FluidMagnetics* fm = sim.magnetics(); fm && fm->magnetic()) {
+                // How often the magnetization was re-solved: the field changes far more
+                // slowly than the step, so most steps reuse the induced field.
+                char buf[160];
+                std::snprintf(buf, sizeof buf, "  M solves %zu/%zu (%s, %d it, drift %.2g%%)", fm->stats().solves,
+                              fm->stats().steps, fm->stats().solver.c_str(), fm->stats().iterations,
+                              100 * fm->stats().cacheError);
+                mag = buf;
+            }
+            std::fprintf(stderr,
+                         "frame %4d/%d  t %.4f s  %5zu steps  %6.1f steps/s  dt %.2e s  iter p %d d %d  "
+                         "rho err %.3f%%%s  ETA %s\n",
+                         frame, lastFrame, sim.time(), steps, steps / std::max(frameSec, 1e-9), st.dt,
+                         st.pressureIterations, st.divergenceIterations, 100 * st.densityError, mag.c_str(),
+                         formatSeconds(eta).c_str());
+        }
+    }
+    if (!opt.quiet) {
+        const double wall = std::chrono::duration<double>(Clock::now() - start).count();
+        std::fprintf(stderr, "ferro-sim: done, %zu steps in %.1f s wall\n", sim.stepCount() - startSteps, wall);
+    }
+}
+
+} // namespace ferro

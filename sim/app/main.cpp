@@ -1,0 +1,42 @@
+// ferro-sim: simulates a shot's fluid and writes one particle file per frame.
+// Parses arguments and calls the ferro_sim library; nothing else lives here.
+#include "sim/core/CommandLine.hpp"
+#include "sim/sph/FluidSimulation.hpp"
+#include "sim/core/ParticleFile.hpp"
+#include "sim/core/SceneDocument.hpp"
+#include "sim/scene/SimSceneFile.hpp"
+#include "sim/app/ShotRunner.hpp"
+
+#include <CLI/CLI.hpp>
+
+int main(int argc, char** argv) {
+    using namespace ferro;
+    CLI::App app{"ferro-sim: SPH simulation of a ferrofluid shot; writes DIR/particles_NNNN.ply per frame"};
+    std::string scenePath;
+    RunOptions opt;
+    std::vector<std::string> overrides;
+    int threads = -1;
+    app.add_option("scene", scenePath, "scene file (TOML)")->required();
+    app.add_option("--out,-o", opt.outDir, "output directory for particle files")->required();
+    addSetOption(app, overrides, "override a scene key by its TOML path: --set section.key=value");
+    app.add_option("--max-frames", opt.maxFrames, "stop after writing frame N (N frames after the initial one)")
+        ->check(CLI::NonNegativeNumber);
+    auto* resume = app.add_flag("--resume", opt.resume, "continue from the last complete frame in the output directory");
+    app.add_flag("--overwrite", opt.overwrite, "delete frames already in the output directory and start over")
+        ->excludes(resume);
+    app.add_flag("--quiet,-q", opt.quiet, "no progress lines on stderr");
+    addThreadsOption(app, threads, "worker threads (default: sim.threads, 0 = all cores)");
+    const std::vector<ErrorExit> errors = {
+        exitOn<SceneError>(kExitBadInput),
+        exitOn<SimulationError>(kExitSimulationFailed, " (frames written so far are kept)"),
+        exitOn<ParticleFileError>(kExitIoError),
+    };
+    return runCommandLine("ferro-sim", app, argc, argv, errors, [&] {
+        const SceneDocument doc = SceneDocument::load(scenePath, overrides);
+        const SimScene scene = parseSimScene(doc);
+        opt.fingerprint = doc.fingerprint();
+        const auto limit = limitThreads(threads >= 0 ? threads : scene.solver.threads);
+        runShot(scene, opt);
+        return kExitOk;
+    });
+}

@@ -1,0 +1,64 @@
+#include "sim/core/CommandLine.hpp"
+
+#include <CLI/CLI.hpp>
+
+#include <iostream>
+
+namespace ferro {
+
+namespace {
+
+int report(const char* program, const std::string& message, int code) {
+    std::cerr << program << ": error: " << message << "\n";
+    return code;
+}
+
+} // namespace
+
+int runCommandLine(const char* program, CLI::App& app, int argc, char** argv, const std::vector<ErrorExit>& errors,
+                   const std::function<int()>& body) {
+    try {
+        app.parse(argc, argv);
+    } catch (const CLI::CallForHelp& e) {
+        return app.exit(e);
+    } catch (const CLI::ParseError& e) {
+        return report(program, std::string(e.what()) + " (see --help)", kExitBadInput);
+    }
+    try {
+        return body();
+    } catch (const CLI::ParseError& e) {
+        return report(program, std::string(e.what()) + " (see --help)", kExitBadInput);
+    } catch (const ArgumentError& e) {
+        return report(program, e.what(), kExitBadInput);
+    } catch (const std::exception& e) {
+        for (const ErrorExit& error : errors) {
+            if (!error.matches(e)) continue;
+            const std::string what = error.rewrite ? error.rewrite(e.what()) : std::string(e.what());
+            return report(program, what + error.note, error.code);
+        }
+        return report(program, e.what(), kExitFailure);
+    }
+}
+
+FrameRange frameRangeArgument(const std::string& option, const std::string& text) {
+    try {
+        return parseFrameRange(text);
+    } catch (const std::invalid_argument& e) {
+        throw ArgumentError(option + " " + e.what());
+    }
+}
+
+CLI::Option* addSetOption(CLI::App& app, std::vector<std::string>& overrides, const std::string& help) {
+    return app.add_option("--set", overrides, help)->type_name("KEY=VALUE");
+}
+
+CLI::Option* addThreadsOption(CLI::App& app, int& threads, const std::string& help) {
+    return app.add_option("--threads", threads, help)->check(CLI::NonNegativeNumber);
+}
+
+std::unique_ptr<tbb::global_control> limitThreads(int threads) {
+    if (threads <= 0) return nullptr;
+    return std::make_unique<tbb::global_control>(tbb::global_control::max_allowed_parallelism, size_t(threads));
+}
+
+} // namespace ferro

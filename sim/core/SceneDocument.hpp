@@ -1,0 +1,112 @@
+#pragma once
+// Scene files: one TOML file describes a shot; each stage reads its own section.
+//
+// SceneDocument loads the file, applies command-line overrides (`--set a.b=value`) and
+// hands out TableReader views. A TableReader reads typed keys with defaults and range
+// checks, remembers which keys it consumed, and `finish()` rejects any key nobody read.
+// Every error is a SceneError whose message is one line naming file, line and key:
+//     examples/dish.toml:12: fluid.rest_density: must be > 0 (got -1200)
+#include "sim/core/Types.hpp"
+
+#include <memory>
+#include <stdexcept>
+#include <string>
+#include <vector>
+
+namespace toml { inline namespace v3 { class table; class node; } }
+
+namespace ferro {
+
+/// Bad scene input. what() is a complete one-line message; tools exit with code 2.
+class SceneError : public std::runtime_error {
+public:
+    using std::runtime_error::runtime_error;
+};
+
+class SceneDocument;
+
+/// Typed, checked access to one TOML table (a section such as [fluid]).
+class TableReader {
+public:
+    TableReader(const SceneDocument& doc, const toml::table& table, std::string path);
+    ~TableReader();
+    TableReader(TableReader&&) noexcept;
+
+    bool has(const std::string& key) const;
+    double number(const std::string& key, double def) const;          ///< int or float
+    double number(const std::string& key) const;                      ///< required
+    double positive(const std::string& key, double def) const;        ///< > 0
+    double positive(const std::string& key) const;                    ///< required, > 0
+    double nonNegative(const std::string& key, double def) const;     ///< >= 0
+    long integer(const std::string& key, long def) const;
+    /// An integer in [lo, hi].
+    int integerInRange(const std::string& key, int def, long lo, long hi) const;
+    bool boolean(const std::string& key, bool def) const;
+    std::string string(const std::string& key, const std::string& def) const;
+    std::string string(const std::string& key) const;                 ///< required
+    /// A string that must be one of `choices`.
+    std::string choice(const std::string& key, const std::vector<std::string>& choices,
+                       const std::string& def) const;
+    Vec3d vec3(const std::string& key, const Vec3d& def) const;        ///< [x, y, z]
+    Vec3d vec3(const std::string& key) const;                         ///< required
+    /// A non-zero vector, normalized.
+    Vec3d unitVector(const std::string& key, const Vec3d& def) const;
+    /// An axis-aligned box from two required corners; blames `maxKey` if it is empty.
+    void box(const std::string& minKey, const std::string& maxKey, Vec3d& lo, Vec3d& hi) const;
+    /// A path relative to the scene file's directory, resolved.
+    std::string path(const std::string& key) const;
+    /// A sub-table (absent = empty table) and an array of tables (absent = none).
+    TableReader table(const std::string& key) const;
+    std::vector<TableReader> tables(const std::string& key) const;
+    /// Raw node access for stages with richer value types (nullptr if absent).
+    const toml::node* node(const std::string& key) const;
+
+    /// Throws if the table holds a key no getter consumed.
+    void finish() const;
+    /// "file:line" of the table, or of one key if it is present.
+    std::string where(const std::string& key = {}) const;
+    [[noreturn]] void fail(const std::string& key, const std::string& message) const;
+    const std::string& tablePath() const { return path_; }
+
+private:
+    const SceneDocument* doc_;
+    const toml::table* table_;
+    std::string path_;
+    struct Used;
+    std::unique_ptr<Used> used_;
+};
+
+/// A parsed scene file with overrides applied.
+class SceneDocument {
+public:
+    /// Parses `path` and applies `overrides` ("section.key=value"; value is TOML, or a bare
+    /// string). Throws SceneError on a missing file, a syntax error or a bad override.
+    static SceneDocument load(const std::string& path, const std::vector<std::string>& overrides = {});
+    /// Same from a string (tests); `name` stands in for the file name in messages.
+    static SceneDocument parse(const std::string& text, const std::string& name,
+                               const std::vector<std::string>& overrides = {});
+    SceneDocument(SceneDocument&&) noexcept;
+    ~SceneDocument();
+
+    TableReader section(const std::string& name) const;   ///< absent section = empty table
+    bool hasSection(const std::string& name) const;
+    const std::string& path() const { return path_; }
+    std::string directory() const;
+    /// Rejects top-level keys that are not a known section of any stage.
+    void checkSections(const std::vector<std::string>& known) const;
+    /// Stable hash of the document (after overrides), to detect a changed scene on resume.
+    std::string fingerprint() const;
+    const toml::table& root() const;
+
+private:
+    SceneDocument();
+    std::string path_;
+    std::unique_ptr<toml::table> root_;
+};
+
+/// Shortest round-trip text of a number, so a message shows exactly the value the user
+/// wrote (-1200, 1e-07) rather than a fixed precision; and of a vector, as [x, y, z].
+std::string formatNumber(double v);
+std::string formatVec(const Vec3d& v);
+
+} // namespace ferro

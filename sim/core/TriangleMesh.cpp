@@ -1,0 +1,390 @@
+// Mesh files: our own binary PLY writer and reader, everything else through assimp
+// (see TriangleMesh.hpp).
+#include "sim/core/TriangleMesh.hpp"
+
+#include "sim/core/AtomicFile.hpp"
+#include "sim/core/PlyHeader.hpp"
+
+#include <assimp/Exporter.hpp>
+#include <assimp/Importer.hpp>
+#include <assimp/postprocess.h>
+#include <assimp/scene.h>
+#include <Eigen/Geometry>
+
+#include <algorithm>
+#include <cctype>
+#include <cerrno>
+#include <cmath>
+#include <cstdio>
+#include <cstring>
+#include <fstream>
+#include <memory>
+
+namespace ferro {
+
+namespace {
+
+[[noreturn]] void fail(const std::string& path, const std::string& reason) {
+    throw MeshFileError(path + ": " + reason);
+}
+
+std::string lower(std::string s) {
+    for (char& c : s) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
+    return s;
+}
+
+std::string extensionOf(const std::string& path) {
+    const size_t slash = path.find_last_of('/');
+    const size_t dot = path.find_last_of('.');
+    if (dot == std::string::npos || (slash != std::string::npos && dot < slash)) return {};
+    return lower(path.substr(dot + 1));
+}
+
+/// Checks that every index names a vertex: a bad index would crash whoever reads the file.
+void checkIndices(const std::string& path, const TriangleMesh& mesh) {
+    const size_t n = mesh.vertices.size();
+    for (const auto& t : mesh.triangles)
+        for (uint32_t i : t)
+            if (i >= n)
+                fail(path, "triangle index " + std::to_string(i) + " out of range (" +
+                               std::to_string(n) + " vertices)");
+}
+
+/// Writes the byte ranges `parts` one after another to `path` atomically (see
+/// sim/core/AtomicFile.hpp), so readers never see a half-written mesh.
+void writeParts(const std::string& path, const std::vector<std::pair<const void*, size_t>>& parts) {
+    try {
+        writeFileAtomically(path, [&](std::ostream& out) {
+            for (const auto& [data, size] : parts)
+                out.write(static_cast<const char*>(data), static_cast<std::streamsize>(size));
+        });
+    } catch (const AtomicFileError& e) {
+        fail(path, e.what());
+    }
+}
+
+// ---------------------------------------------------------------------------------------
+// Our binary PLY
+// ---------------------------------------------------------------------------------------
+
+void writePly(const std::string& path, const TriangleMesh& mesh) {
+    if (!hostIsLittleEndian()) fail(path, "binary PLY writing needs a little-endian host");
+    const bool withNormals = !mesh.normals.empty();
+    if (withNormals && mesh.normals.size() != mesh.vertices.size())
+        fail(path, std::to_string(mesh.normals.size()) + " normals for " +
+                       std::to_string(mesh.vertices.size()) + " vertices");
+    std::string header;
+    try {
+        header = binaryPlyHeaderStart(mesh.comments);
+    } catch (const std::invalid_argument& e) {
+        fail(path, e.what());
+    }
+    header += "element vertex " + std::to_string(mesh.vertices.size()) + "\n";
+    header += "property float x\nproperty float y\nproperty float z\n";
+    if (withNormals) header += "property float nx\nproperty float ny\nproperty float nz\n";
+    header += "element face " + std::to_string(mesh.triangles.size()) + "\n";
+    header += "property list uchar uint vertex_indices\nend_header\n";
+
+    const size_t stride = withNormals ? 6 : 3;
+    std::vector<float> vertexData(mesh.vertices.size() * stride);
+    for (size_t i = 0; i < mesh.vertices.size(); ++i) {
+        float* row = &vertexData[i * stride];
+        for (int k = 0; k < 3; ++k) row[k] = mesh.vertices[i][k];
+        if (withNormals)
+            for (int k = 0; k < 3; ++k) row[3 + k] = mesh.normals[i][k];
+    }
+    constexpr size_t faceBytes = 1 + 3 * sizeof(uint32_t);
+    std::vector<unsigned char> faceData(mesh.triangles.size() * faceBytes);
+    for (size_t t = 0; t < mesh.triangles.size(); ++t) {
+        unsigned char* p = &faceData[t * faceBytes];
+        p[0] = 3;
+        std::memcpy(p + 1, mesh.triangles[t].data(), 3 * sizeof(uint32_t));
+    }
+    writeParts(path, {{header.data(), header.size()},
+                      {vertexData.data(), vertexData.size() * sizeof(float)},
+                      {faceData.data(), faceData.size()}});
+}
+
+/// Every element item with properties takes at least one byte (binary) or two characters
+/// (ascii), so counts beyond the bytes after the header are a corrupt or truncated file. Checked
+/// for every PLY before anything is allocated, by our reader or by assimp's.
+void checkPlyCounts(const std::string& path, const PlyHeader& h, std::istream& in) {
+    in.seekg(0, std::ios::end);
+    const auto end = in.tellg();
+    if (end < 0 || !in) fail(path, "cannot determine the file size");
+    const uint64_t available = static_cast<uint64_t>(end) - h.dataOffset;
+    uint64_t items = 0;
+    for (const auto& e : h.elements) {
+        if (e.properties.empty()) continue;
+        if (e.count > available - std::min(items, available))
+            fail(path, "truncated (the header declares " + std::to_string(e.count) + " " + e.name + " items in " +
+                           std::to_string(available) + " bytes)");
+        items += e.count;
+    }
+}
+
+/// Fast path for the files we write ourselves (and any binary little-endian PLY with float
+/// vertex properties and a uchar/uint face list): one read, no assimp scene.
+/// False when the file has another layout; throws when it has ours but is broken.
+bool readOwnPly(const std::string& path, const PlyHeader& h, std::istream& in, TriangleMesh& mesh) {
+    if (h.format != PlyFormat::BinaryLittleEndian || h.elements.size() != 2) return false;
+    const auto& ve = h.elements[0];
+    const auto& fe = h.elements[1];
+    if (ve.name != "vertex" || fe.name != "face") return false;
+    int ix = -1, iy = -1, iz = -1, inx = -1, iny = -1, inz = -1;
+    for (size_t i = 0; i < ve.properties.size(); ++i) {
+        const PlyProperty& p = ve.properties[i];
+        if (p.isList || p.type != PlyScalar::Float32) return false;
+        const int k = static_cast<int>(i);
+        if (p.name == "x") ix = k;
+        else if (p.name == "y") iy = k;
+        else if (p.name == "z") iz = k;
+        else if (p.name == "nx") inx = k;
+        else if (p.name == "ny") iny = k;
+        else if (p.name == "nz") inz = k;
+    }
+    if (ix < 0 || iy < 0 || iz < 0) return false;
+    if (fe.properties.size() != 1) return false;
+    const PlyProperty& fp = fe.properties[0];
+    if (!fp.isList || fp.countType != PlyScalar::UInt8 ||
+        (fp.type != PlyScalar::UInt32 && fp.type != PlyScalar::Int32))
+        return false;
+    if (!hostIsLittleEndian()) return false;
+
+    in.seekg(0, std::ios::end);
+    const auto end = in.tellg();
+    if (end < 0 || !in) fail(path, "cannot determine the file size");
+    in.seekg(static_cast<std::streamoff>(h.dataOffset));
+    if (!in) fail(path, "cannot seek to the data");
+    const uint64_t available = static_cast<uint64_t>(end) - h.dataOffset;
+    const size_t cols = ve.properties.size();
+    if (ve.count > available / (cols * sizeof(float))) fail(path, "truncated (expected " + std::to_string(ve.count) + " vertices)");
+    const size_t nv = static_cast<size_t>(ve.count);
+    std::vector<float> rows(nv * cols);
+    in.read(reinterpret_cast<char*>(rows.data()), static_cast<std::streamsize>(rows.size() * sizeof(float)));
+    if (static_cast<size_t>(in.gcount()) != rows.size() * sizeof(float))
+        fail(path, "truncated (expected " + std::to_string(ve.count) + " vertices)");
+    const bool normals = inx >= 0 && iny >= 0 && inz >= 0;
+    mesh.vertices.resize(nv);
+    if (normals) mesh.normals.resize(nv);
+    for (size_t i = 0; i < nv; ++i) {
+        const float* r = &rows[i * cols];
+        mesh.vertices[i] = Vec3(r[ix], r[iy], r[iz]);
+        if (normals) mesh.normals[i] = Vec3(r[inx], r[iny], r[inz]);
+    }
+
+    const uint64_t rest = available - nv * cols * sizeof(float);
+    // Every face takes at least one count byte; checked before reserving.
+    if (fe.count > rest) fail(path, "truncated (expected " + std::to_string(fe.count) + " faces)");
+    std::vector<unsigned char> bytes(static_cast<size_t>(rest));
+    in.read(reinterpret_cast<char*>(bytes.data()), static_cast<std::streamsize>(bytes.size()));
+    const unsigned char* p = bytes.data();
+    const unsigned char* e = p + in.gcount();
+    mesh.triangles.reserve(static_cast<size_t>(fe.count));
+    uint32_t poly[256];
+    for (uint64_t f = 0; f < fe.count; ++f) {
+        if (p >= e) fail(path, "truncated (expected " + std::to_string(fe.count) + " faces)");
+        const unsigned n = *p++;
+        if (size_t(e - p) < n * sizeof(uint32_t))
+            fail(path, "truncated (expected " + std::to_string(fe.count) + " faces)");
+        std::memcpy(poly, p, n * sizeof(uint32_t));
+        p += n * sizeof(uint32_t);
+        for (unsigned k = 0; k < n; ++k)
+            if (poly[k] >= nv) fail(path, "face " + std::to_string(f) + " has index " +
+                                              std::to_string(poly[k]) + " out of range");
+        // Polygons become triangle fans (our own files only hold triangles).
+        for (unsigned k = 2; k < n; ++k) mesh.triangles.push_back({poly[0], poly[k - 1], poly[k]});
+    }
+    return true;
+}
+
+// ---------------------------------------------------------------------------------------
+// assimp
+// ---------------------------------------------------------------------------------------
+
+/// The assimp export id for `format` (an id or a file extension), or empty.
+std::string assimpFormatId(const std::string& format) {
+    const std::string f = lower(format);
+    // OBJ without the .mtl side file: a mesh file stays one file, written atomically.
+    if (f == "obj") return "objnomtl";
+    Assimp::Exporter exporter;
+    const size_t n = exporter.GetExportFormatCount();
+    for (size_t i = 0; i < n; ++i)
+        if (lower(exporter.GetExportFormatDescription(i)->id) == f) return exporter.GetExportFormatDescription(i)->id;
+    for (size_t i = 0; i < n; ++i)
+        if (lower(exporter.GetExportFormatDescription(i)->fileExtension) == f)
+            return exporter.GetExportFormatDescription(i)->id;
+    return {};
+}
+
+/// A one-mesh assimp scene holding `mesh` (the scene owns copies of the arrays).
+std::unique_ptr<aiScene> toAssimpScene(const TriangleMesh& mesh) {
+    auto scene = std::make_unique<aiScene>();
+    scene->mRootNode = new aiNode();
+    scene->mMaterials = new aiMaterial*[1]{new aiMaterial()};
+    scene->mNumMaterials = 1;
+    auto* m = new aiMesh();
+    scene->mMeshes = new aiMesh*[1]{m};
+    scene->mNumMeshes = 1;
+    scene->mRootNode->mMeshes = new unsigned int[1]{0};
+    scene->mRootNode->mNumMeshes = 1;
+    m->mMaterialIndex = 0;
+    m->mPrimitiveTypes = aiPrimitiveType_TRIANGLE;
+    m->mNumVertices = static_cast<unsigned>(mesh.vertices.size());
+    m->mVertices = new aiVector3D[m->mNumVertices];
+    for (size_t i = 0; i < mesh.vertices.size(); ++i)
+        m->mVertices[i] = aiVector3D(mesh.vertices[i].x(), mesh.vertices[i].y(), mesh.vertices[i].z());
+    if (!mesh.normals.empty()) {
+        m->mNormals = new aiVector3D[m->mNumVertices];
+        for (size_t i = 0; i < mesh.normals.size(); ++i)
+            m->mNormals[i] = aiVector3D(mesh.normals[i].x(), mesh.normals[i].y(), mesh.normals[i].z());
+    }
+    m->mNumFaces = static_cast<unsigned>(mesh.triangles.size());
+    m->mFaces = new aiFace[m->mNumFaces];
+    for (size_t t = 0; t < mesh.triangles.size(); ++t) {
+        aiFace& f = m->mFaces[t];
+        f.mNumIndices = 3;
+        f.mIndices = new unsigned int[3]{mesh.triangles[t][0], mesh.triangles[t][1], mesh.triangles[t][2]};
+    }
+    return scene;
+}
+
+void writeWithAssimp(const std::string& path, const TriangleMesh& mesh, const std::string& id) {
+    if (!mesh.normals.empty() && mesh.normals.size() != mesh.vertices.size())
+        fail(path, std::to_string(mesh.normals.size()) + " normals for " +
+                       std::to_string(mesh.vertices.size()) + " vertices");
+    const std::unique_ptr<aiScene> scene = toAssimpScene(mesh);
+    Assimp::Exporter exporter;
+    // Exported to memory and written by us, so the file appears atomically.
+    const aiExportDataBlob* blob = exporter.ExportToBlob(scene.get(), id);
+    if (!blob) fail(path, "assimp export as '" + id + "' failed: " + exporter.GetErrorString());
+    writeParts(path, {{blob->data, blob->size}});
+}
+
+TriangleMesh readWithAssimp(const std::string& path) {
+    Assimp::Importer importer;
+    // Points and lines are dropped; only triangles describe a surface.
+    importer.SetPropertyInteger(AI_CONFIG_PP_SBP_REMOVE, aiPrimitiveType_POINT | aiPrimitiveType_LINE);
+    const aiScene* scene = importer.ReadFile(
+        path, aiProcess_Triangulate | aiProcess_JoinIdenticalVertices | aiProcess_SortByPType |
+                  aiProcess_PreTransformVertices);
+    if (!scene) fail(path, std::string("cannot read mesh: ") + importer.GetErrorString());
+    TriangleMesh mesh;
+    bool allNormals = true;
+    for (unsigned k = 0; k < scene->mNumMeshes; ++k) allNormals = allNormals && scene->mMeshes[k]->HasNormals();
+    for (unsigned k = 0; k < scene->mNumMeshes; ++k) {
+        const aiMesh* m = scene->mMeshes[k];
+        const auto base = static_cast<uint32_t>(mesh.vertices.size());
+        for (unsigned i = 0; i < m->mNumVertices; ++i) {
+            const aiVector3D& v = m->mVertices[i];
+            mesh.vertices.emplace_back(v.x, v.y, v.z);
+            if (allNormals) {
+                const aiVector3D& n = m->mNormals[i];
+                mesh.normals.emplace_back(n.x, n.y, n.z);
+            }
+        }
+        for (unsigned f = 0; f < m->mNumFaces; ++f) {
+            const aiFace& face = m->mFaces[f];
+            if (face.mNumIndices != 3) continue;
+            mesh.triangles.push_back({base + face.mIndices[0], base + face.mIndices[1], base + face.mIndices[2]});
+        }
+    }
+    checkIndices(path, mesh);
+    return mesh;
+}
+
+} // namespace
+
+// ---------------------------------------------------------------------------------------
+
+void writeMesh(const std::string& path, const TriangleMesh& mesh, const std::string& format) {
+    const std::string requested = format.empty() ? extensionOf(path) : lower(format);
+    checkIndices(path, mesh);
+    if (requested.empty()) fail(path, "no mesh format given and the file name has no extension");
+    if (requested == "ply" || requested == "plyb") {
+        writePly(path, mesh);
+        return;
+    }
+    const std::string id = assimpFormatId(requested);
+    if (id.empty()) fail(path, "unknown mesh format '" + requested + "'");
+    writeWithAssimp(path, mesh, id);
+}
+
+TriangleMesh readMesh(const std::string& path) {
+    std::ifstream in(path, std::ios::binary);
+    if (!in) fail(path, std::string("cannot open: ") + std::strerror(errno));
+    // A PLY header is read by us (comments, count checks); any other format goes to assimp.
+    PlyHeader header;
+    bool isPly = true;
+    try {
+        header = readPlyHeader(in);
+    } catch (const PlyHeaderError& e) {
+        if (e.kind() == PlyHeaderError::Kind::EndWithoutLineBreak)
+            fail(path, "truncated (the header ends without a line break)");
+        if (e.kind() == PlyHeaderError::Kind::Malformed) fail(path, e.what());
+        isPly = false;
+    }
+    if (isPly) {
+        in.clear();
+        checkPlyCounts(path, header, in);
+        TriangleMesh mesh;
+        if (readOwnPly(path, header, in, mesh)) {
+            mesh.comments = std::move(header.comments);
+            return mesh;
+        }
+    }
+    in.close();
+    TriangleMesh mesh = readWithAssimp(path);
+    if (isPly) mesh.comments = std::move(header.comments);
+    return mesh;
+}
+
+double enclosedVolume(const TriangleMesh& mesh) {
+    if (mesh.triangles.empty()) return 0.0;
+    // Tetrahedra against a point near the mesh rather than the origin: the sum of large
+    // signed terms would otherwise cancel away digits for a mesh far from the origin.
+    const Vec3d origin = mesh.vertices[mesh.triangles[0][0]].cast<double>();
+    double sixTimes = 0.0;
+    for (const auto& t : mesh.triangles) {
+        const Vec3d a = mesh.vertices[t[0]].cast<double>() - origin;
+        const Vec3d b = mesh.vertices[t[1]].cast<double>() - origin;
+        const Vec3d c = mesh.vertices[t[2]].cast<double>() - origin;
+        sixTimes += a.dot(b.cross(c));
+    }
+    return sixTimes / 6.0;
+}
+
+std::vector<Vec3d> areaWeightedNormals(const TriangleMesh& mesh) {
+    std::vector<Vec3d> sum(mesh.vertices.size(), Vec3d::Zero());
+    for (const auto& t : mesh.triangles) {
+        const Vec3d a = mesh.vertices[t[0]].cast<double>();
+        const Vec3d b = mesh.vertices[t[1]].cast<double>();
+        const Vec3d c = mesh.vertices[t[2]].cast<double>();
+        const Vec3d n = (b - a).cross(c - a); // length = twice the area: area weighting
+        for (uint32_t i : t) sum[i] += n;
+    }
+    for (Vec3d& n : sum) {
+        const double len = n.norm();
+        // A vertex in no triangle (or only degenerate ones) has no direction; +z keeps the
+        // normal unit length for renderers that expect one.
+        n = len > 0 ? Vec3d(n / len) : Vec3d(0, 0, 1);
+    }
+    return sum;
+}
+
+void computeVertexNormals(TriangleMesh& mesh) {
+    const std::vector<Vec3d> n = areaWeightedNormals(mesh);
+    mesh.normals.resize(n.size());
+    for (size_t i = 0; i < n.size(); ++i) mesh.normals[i] = n[i].cast<Real>();
+}
+
+void setComment(TriangleMesh& mesh, const std::string& key, const std::string& value) {
+    for (auto& c : mesh.comments)
+        if (c.first == key) {
+            c.second = value;
+            return;
+        }
+    mesh.comments.emplace_back(key, value);
+}
+
+} // namespace ferro

@@ -1,0 +1,56 @@
+#pragma once
+// Triangle meshes as the stages after ferro-surface pass them along, and their files.
+//
+// surface/ owns meshes and mesh files (DESIGN.md): ferro-surface writes them, ferro-spikes
+// reads and displaces them, ferro-pov exports them. This header includes no OpenVDB, CGAL or
+// assimp header, so any stage may include it cheaply.
+//
+// Files: binary little-endian PLY is written directly (fast, and it carries `comment key
+// value` header lines: frame, time, and the magnets' state copied from the particle file);
+// every other format assimp can export (obj, stl, ...) goes through assimp. Reading accepts
+// any format assimp imports. Writes are atomic (temporary file, then rename).
+#include "sim/core/Types.hpp"
+
+#include <array>
+#include <cstdint>
+#include <stdexcept>
+#include <string>
+#include <utility>
+#include <vector>
+
+namespace ferro {
+
+class MeshFileError : public std::runtime_error {
+public:
+    using std::runtime_error::runtime_error;
+};
+
+struct TriangleMesh {
+    std::vector<Vec3> vertices;                      ///< positions [m]
+    std::vector<Vec3> normals;                       ///< unit outward normal per vertex; empty = none
+    std::vector<std::array<uint32_t, 3>> triangles;  ///< counter-clockwise seen from outside
+    /// `comment key value` metadata carried from stage to stage (frame, time, magnets).
+    std::vector<std::pair<std::string, std::string>> comments;
+
+    bool empty() const { return triangles.empty(); }
+};
+
+/// Writes `mesh` to `path` atomically. `format` is an assimp export id ("ply", "obj", "stl",
+/// ...) or empty to take it from the file extension. Throws MeshFileError with a one-line reason.
+void writeMesh(const std::string& path, const TriangleMesh& mesh, const std::string& format = {});
+/// Reads a triangle mesh (any format assimp imports; PLY comments are kept).
+/// Throws MeshFileError with a one-line reason.
+TriangleMesh readMesh(const std::string& path);
+
+/// Signed enclosed volume [m^3] (divergence theorem); positive for an outward-oriented closed mesh.
+double enclosedVolume(const TriangleMesh& mesh);
+/// Area-weighted unit vertex normals from the triangles (outward for counter-clockwise
+/// triangles), in double precision; +z for a vertex in no triangle with area.
+std::vector<Vec3d> areaWeightedNormals(const TriangleMesh& mesh);
+/// Sets mesh.normals to areaWeightedNormals(mesh).
+void computeVertexNormals(TriangleMesh& mesh);
+
+/// Sets the first `comment key value` line of `mesh` to `value`, or appends one.
+void setComment(TriangleMesh& mesh, const std::string& key, const std::string& value);
+
+} // namespace ferro

@@ -1,0 +1,91 @@
+#include "sim/magnetics/MagnetScene.hpp"
+
+#include <limits>
+
+namespace ferro {
+
+namespace {
+
+// The strength key is named for what it is for each kind, in the magnet and in its keys.
+const char* strengthKey(Magnet::Kind kind)
+{
+    switch (kind) {
+    case Magnet::Kind::Dipole: return "moment";        // [A m^2]
+    case Magnet::Kind::Bar: return "pole_strength";    // [A m]
+    case Magnet::Kind::Uniform: return "field";        // [A/m]
+    case Magnet::Kind::Loop: return "current";         // [A]
+    }
+    return "strength";
+}
+
+MagnetTrack parseMagnet(const TableReader& r)
+{
+    MagnetTrack track;
+    Magnet& m = track.base;
+    const std::string kind = r.choice("kind", {"dipole", "bar", "uniform", "loop"}, "dipole");
+    m.kind = kind == "bar" ? Magnet::Kind::Bar
+           : kind == "uniform" ? Magnet::Kind::Uniform
+           : kind == "loop" ? Magnet::Kind::Loop : Magnet::Kind::Dipole;
+    const std::string sKey = strengthKey(m.kind);
+    if (m.kind != Magnet::Kind::Uniform)
+        m.position = r.vec3("position", m.position);
+    m.direction = r.unitVector("direction", m.direction);
+    m.strength = r.number(sKey, 0.0);
+    if (m.kind == Magnet::Kind::Bar)
+        m.length = r.positive("length");
+    if (m.kind == Magnet::Kind::Loop)
+        m.radius = r.positive("radius");
+    if (m.kind != Magnet::Kind::Uniform)
+        m.softening = r.nonNegative("softening", m.softening);
+    double lastTime = -std::numeric_limits<double>::infinity();
+    for (const TableReader& k : r.tables("keys")) {
+        MagnetKeyframe key;
+        key.time = k.nonNegative("time", 0.0);
+        if (!k.has("time"))
+            k.fail("time", "every [[magnets.keys]] needs a time");
+        if (key.time < lastTime)
+            k.fail("time", "keys must be in time order (got " + formatNumber(key.time) + " after " +
+                               formatNumber(lastTime) + ")");
+        lastTime = key.time;
+        key.position = m.kind != Magnet::Kind::Uniform ? k.vec3("position", m.position) : m.position;
+        key.direction = k.unitVector("direction", m.direction);
+        key.strength = k.number(sKey, m.strength);
+        k.finish();
+        track.keys.push_back(key);
+    }
+    r.finish();
+    return track;
+}
+
+} // namespace
+
+std::vector<MagnetTrack> parseMagnets(const SceneDocument& doc)
+{
+    std::vector<MagnetTrack> tracks;
+    for (const TableReader& r : TableReader(doc, doc.root(), "").tables("magnets"))
+        tracks.push_back(parseMagnet(r));
+    return tracks;
+}
+
+MagnetizationParams parseMagnetization(const SceneDocument& doc)
+{
+    TableReader r = doc.section("magnetization");
+    MagnetizationParams p;
+    p.susceptibility = r.nonNegative("susceptibility", p.susceptibility);
+    p.saturation = r.nonNegative("saturation", p.saturation);
+    const std::string solver = r.choice("solver", {"auto", "external", "direct", "tree"}, "auto");
+    p.solver = solver == "external" ? MagnetizationParams::Solver::External
+             : solver == "direct" ? MagnetizationParams::Solver::Direct
+             : solver == "tree" ? MagnetizationParams::Solver::Tree : MagnetizationParams::Solver::Auto;
+    p.tolerance = r.positive("tolerance", p.tolerance);
+    p.openingAngle = r.number("opening_angle", p.openingAngle);
+    if (!(p.openingAngle > 0 && p.openingAngle < 1.5))
+        r.fail("opening_angle", "must be in (0, 1.5) (got " + formatNumber(p.openingAngle) + ")");
+    p.resolveEvery = r.integerInRange("resolve_every", p.resolveEvery, 0, INT_MAX);
+    p.maxIterations = r.integerInRange("max_iterations", p.maxIterations, 1, 10000);
+    p.inducedForce = r.boolean("induced_force", p.inducedForce);
+    r.finish();
+    return p;
+}
+
+} // namespace ferro

@@ -1,0 +1,34 @@
+#pragma once
+// The magnets' state at a frame, carried in the particle file's header so later stages
+// (ferro-spikes, ferro-pov) evaluate the same field at any point without the simulation.
+//
+// One `comment magnet ...` line per magnet, in scene order, after `comment magnet_count N`:
+//     comment magnet_count 1
+//     comment magnet dipole px py pz dx dy dz strength length radius softening
+// kind is dipole|bar|uniform|loop; position [m], unit direction, strength in the kind's unit
+// (moment A m^2, pole strength A m, field A/m, current A), length, radius, softening [m];
+// numbers are printed with 9 significant digits (float-exact, more than enough for a field).
+// The fluid's magnetic law is carried as `comment susceptibility chi0` and
+// `comment saturation Ms` (A/m, 0 = linear).
+#include "sim/magnetics/MagnetField.hpp"
+#include "sim/core/ParticleFile.hpp"
+#include "sim/magnetics/MagnetizationParams.hpp"
+
+#include <string>
+#include <vector>
+
+namespace ferro {
+
+/// "dipole", "bar", "uniform" or "loop".
+const char* magnetKindName(Magnet::Kind kind);
+
+/// Appends magnet_count and one magnet comment per magnet to `table` (and the fluid's
+/// magnetic law when `law` is given).
+void writeMagnetComments(ParticleTable& table, const std::vector<Magnet>& magnets,
+                         const MagnetizationParams* law = nullptr);
+
+/// The magnets of a particle file's header. Throws ParticleFileError on a malformed line
+/// or a count that does not match; a file without `magnet_count` has no magnets.
+std::vector<Magnet> readMagnetComments(const ParticleTable& table);
+
+} // namespace ferro

@@ -1,0 +1,31 @@
+#pragma once
+// [magnetization]: the fluid's magnetic law and how its self-consistent field is solved.
+// Filled from the scene file by sim/magnetics/MagnetScene.cpp.
+
+namespace ferro {
+
+/// [magnetization]: how the fluid magnetizes (paper eq. 5 with Langevin saturation) and how
+/// the particle-particle field is computed. The solvers trade speed for accuracy:
+/// External ignores the particles' own field (exact as chi0 -> 0, O(N)), Direct sums all
+/// pairs (O(N^2), the reference), Tree is a Barnes-Hut octree (O(N log N), error set by the
+/// opening angle), Auto picks the cheapest whose estimated error is under `tolerance`.
+struct MagnetizationParams {
+    enum class Solver { External, Direct, Tree, Auto };
+    double susceptibility = 0.0;   ///< initial susceptibility chi0 (dimensionless); 0 = not magnetic
+    double saturation = 0.0;       ///< saturation magnetization Ms [A/m]; 0 = never saturates (M = chi0 H)
+    Solver solver = Solver::Auto;
+    double tolerance = 0.01;       ///< accepted relative RMS field error (auto's choice, re-solve trigger)
+    double openingAngle = 0.5;     ///< Barnes-Hut opening angle theta (cell size / distance)
+    int resolveEvery = 0;          ///< re-solve every K steps; 0 = when the field may have changed by > tolerance
+    int maxIterations = 50;        ///< self-consistency iterations per solve (direct, tree)
+    /// Kelvin force from the gradient of the particles' own field too (SPH difference
+    /// gradient), not only of the magnets' field. Off by default: at a free surface that
+    /// gradient is the magnetic normal traction mu0 M_n^2 / 2, which a gauge-pressure SPH
+    /// fluid (no atmosphere, no tension) cannot hold, so surface particles lift off; the
+    /// instability it drives is what ferro-spikes synthesizes. The particles' field always
+    /// enters M (demagnetization), whichever way this is set.
+    bool inducedForce = false;
+    bool enabled() const { return susceptibility > 0; }
+};
+
+} // namespace ferro

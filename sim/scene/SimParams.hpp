@@ -1,0 +1,101 @@
+#pragma once
+// Plain parameter structs of a shot, in SI units. SimSceneFile.cpp (with
+// sim/magnetics/MagnetScene.cpp for the magnets) is the one place that fills them from a
+// TOML scene file; every default here is the documented default of
+// the matching scene key (see examples/annotated.toml).
+#include "sim/magnetics/MagnetField.hpp"
+#include "sim/magnetics/MagnetizationParams.hpp"
+#include "sim/core/Types.hpp"
+
+#include <string>
+#include <vector>
+
+namespace ferro {
+
+/// A region filled with fluid particles at the start of the shot ([[fluid.block]]).
+struct FluidBlock {
+    enum class Shape { Box, Cylinder };
+    Shape shape = Shape::Box;
+    Vec3d min{0, 0, 0}, max{0, 0, 0}; ///< box corners [m]
+    Vec3d center{0, 0, 0};            ///< cylinder: centre of the bottom disc [m]; axis is +z
+    double radius = 0;                ///< cylinder radius [m]
+    double height = 0;                ///< cylinder height [m]
+    Vec3d velocity{0, 0, 0};          ///< initial velocity [m/s]
+    long count = 0;                   ///< exact particle count; 0 = fill at fluid.spacing
+    std::string where;                ///< "file:line" of the block, for error messages
+};
+
+/// [fluid]: material of the (single) fluid.
+struct FluidParams {
+    double restDensity = 1000.0;  ///< rho0 [kg/m^3]
+    double viscosity = 1e-6;      ///< kinematic viscosity nu [m^2/s]
+    double surfaceTension = 0.0;  ///< sigma [N/m]; 0 disables surface tension
+    double spacing = 0.0;         ///< particle spacing [m]; 0 = derived from a block's count
+    std::vector<FluidBlock> blocks;
+};
+
+/// [container]: the vessel. Walls are sampled with boundary particles (Akinci 2012) and,
+/// as a hard guarantee, particle motion is never allowed to cross a wall.
+struct ContainerParams {
+    enum class Type { None, Box, Dish, Mesh };
+    Type type = Type::None;
+    // box
+    Vec3d min{0, 0, 0}, max{0, 0, 0}; ///< box corners [m]
+    bool closedTop = false;           ///< box: sample a lid too (the top is always a hard limit)
+    // dish: a cylinder with a floor, axis +z
+    Vec3d center{0, 0, 0};            ///< centre of the dish floor [m]
+    double radius = 0;                ///< inner radius [m]
+    double height = 0;                ///< wall height [m]
+    // mesh
+    std::string meshFile;             ///< closed triangle mesh (OBJ, STL, PLY), resolved path
+    double meshScale = 1.0;           ///< uniform scale applied to the file's coordinates
+    Vec3d meshTranslate{0, 0, 0};     ///< translation applied after scaling [m]
+    bool fluidInside = false;         ///< true: the mesh interior is the fluid domain;
+                                      ///< false: the mesh is the solid vessel (fluid outside it)
+    bool hasBounds = false;           ///< mesh: explicit safety box given
+    Vec3d boundsMin{0, 0, 0}, boundsMax{0, 0, 0}; ///< mesh: safety box [m]
+    double wallFriction = 0.0;        ///< boundary viscosity factor (0 = free slip, 1 = as fluid)
+};
+
+/// [sim]: solver settings.
+struct SolverParams {
+    /// Pressure solver by its registered name (sim/sph/PressureSolvers.cpp): "dfsph" or
+    /// "wcsph". The scene parser takes any name; the simulation checks it against the
+    /// registry and blames `pressureSolverWhere`.
+    std::string pressureSolver = "dfsph";
+    std::string pressureSolverWhere;  ///< "file:line" of the sim.solver key, for that message
+    Vec3d gravity{0, 0, -9.81};       ///< [m/s^2]
+    double cfl = 0.4;                 ///< CFL number (step <= cfl * spacing / vmax)
+    double maxDt = 0.001;             ///< upper bound of the time step [s]
+    double minDt = 1e-7;              ///< lower bound; a smaller step aborts the run [s]
+    double soundSpeed = 0.0;          ///< WCSPH speed of sound [m/s]; 0 = 10x the largest expected speed
+    double maxDensityError = 0.001;   ///< DFSPH: mean relative density error tolerance (0.1 %)
+    double maxDivergenceError = 0.001;///< DFSPH: mean relative density change per step left by the divergence solve (0.1 %)
+    int maxIterations = 100;          ///< DFSPH: iteration cap of each solve
+    /// Artificial viscosity alpha, dimensionless: adds alpha * h * U to the kinematic
+    /// viscosity (h the kernel support, U the flow speed scale of the scene). SPH at
+    /// millimetre spacing cannot resolve the tiny physical viscosity of water or oil; this
+    /// damps particle noise without depending on the time step.
+    double artificialViscosity = 0.02;
+    int threads = 0;                  ///< worker threads; 0 = all cores
+};
+
+/// [shot]: timing of the output.
+struct ShotParams {
+    double fps = 30.0;                ///< output frames per second [1/s]
+    double duration = 1.0;            ///< simulated time [s]
+    int frameCount() const { return static_cast<int>(duration * fps + 0.5); }
+};
+
+/// Everything ferro-sim needs to run a shot.
+struct SimScene {
+    std::string path;                 ///< scene file it came from
+    ShotParams shot;
+    FluidParams fluid;
+    ContainerParams container;
+    SolverParams solver;
+    std::vector<MagnetTrack> magnets;   ///< [[magnets]], each with optional [[magnets.keys]]
+    MagnetizationParams magnetization;  ///< [magnetization]
+};
+
+} // namespace ferro

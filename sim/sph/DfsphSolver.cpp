@@ -1,0 +1,180 @@
+// Divergence-free SPH (Bender & Koschier 2017): a divergence solve keeps the velocity
+// field divergence-free, a constant-density solve corrects the predicted density, both
+// by relaxed Jacobi iterations on the pressure Poisson system, warm-started. Steps are
+// about ten times longer than WCSPH's.
+#include "sim/sph/PressureSolver.hpp"
+
+#include "sim/core/ParticleLoops.hpp"
+#include "sim/sph/FluidSimulation.hpp"
+
+#include <algorithm>
+
+namespace ferro {
+
+namespace {
+
+/// Fewer neighbours than this (fluid and wall) marks a particle near the free surface,
+/// where the divergence solve leaves it alone (SPlisHSPlasH's threshold for 3-D).
+constexpr uint32_t kDenseNeighborhood = 20;
+
+class DfsphSolver final : public PressureSolver {
+public:
+    explicit DfsphSolver(FluidSimulation& sim) : sim_(sim) {}
+
+    bool storesGradients() const override { return true; }
+
+    double maxTimeStep(double maxSpeed) const override {
+        const SolverParams& sp = sim_.scene().solver;
+        return maxSpeed > 0 ? sp.cfl * sim_.spacing() / maxSpeed : sp.maxDt;
+    }
+
+    void advanceVelocities(double dt) override {
+        computeFactors();
+        solveDivergence(dt);
+        sim_.computeAccelerations(nullptr); // everything but pressure
+        std::vector<Vec3>& v = sim_.solverVelocities();
+        const std::vector<Vec3>& a = sim_.accelerations();
+        forEachParticle(sim_.size(), [&](size_t i) { v[i] += Real(dt) * a[i]; });
+        solveDensity(dt);
+    }
+
+    void permute(const std::vector<uint32_t>& order) override {
+        if (kappaV_.size() == order.size()) ferro::permute(kappaV_, order);
+    }
+
+    void resetWarmStart() override {
+        kappaV_.assign(sim_.size(), Real(0));
+    }
+
+private:
+    void computeFactors();
+    void solveDivergence(double dt);
+    void solveDensity(double dt);
+    int relaxedJacobi(std::vector<Real>& kappa, const std::vector<Real>& source, double hPow, double eta,
+                      int minIterations, bool densitySolve);
+    uint32_t neighborCount(size_t i) const {
+        return sim_.fluidNeighbors().count[i] + sim_.boundaryNeighbors().count[i];
+    }
+
+    FluidSimulation& sim_;
+    std::vector<Real> alpha_, kappa_, kappaV_, source_, residual_;
+};
+
+void DfsphSolver::computeFactors() {
+    // alpha_i = 1 / (|sum_j V grad W_ij + sum_b V_b grad W_ib|^2 + sum_j |V grad W_ij|^2),
+    // the inverse diagonal of the pressure system (Bender & Koschier 2017).
+    const Real V = Real(sim_.particleVolume());
+    const NeighborLists& fluidNbr = sim_.fluidNeighbors();
+    const NeighborLists& boundaryNbr = sim_.boundaryNeighbors();
+    const std::vector<Real>& bVolume = sim_.boundaryVolumes();
+    const double h = sim_.supportRadius();
+    alpha_.resize(sim_.size());
+    forEachParticle(sim_.size(), [&](size_t i) {
+        // With mirrored wall pressure the diagonal of the system is
+        // (g_f + g_b) . (g_f + kWallMirror g_b) + sum_j |V grad W_ij|^2.
+        Vec3 fluid = Vec3::Zero(), wall = Vec3::Zero();
+        Real sum2 = 0;
+        for (uint32_t k = fluidNbr.begin(i); k < fluidNbr.end(i); ++k) {
+            const Vec3 g = V * fluidNbr.gradW[k];
+            fluid += g;
+            sum2 += g.squaredNorm();
+        }
+        for (uint32_t k = boundaryNbr.begin(i); k < boundaryNbr.end(i); ++k)
+            wall += bVolume[boundaryNbr.index[k]] * boundaryNbr.gradW[k];
+        const Real denom = (fluid + wall).dot(fluid + FluidSimulation::kWallMirror * wall) + sum2;
+        alpha_[i] = denom > Real(1e-6) * Real(1 / (h * h)) ? 1 / denom : 0;
+    });
+}
+
+int DfsphSolver::relaxedJacobi(std::vector<Real>& kappa, const std::vector<Real>& source, double hPow,
+                               double eta, int minIterations, bool densitySolve) {
+    // Relaxed Jacobi on the pressure Poisson system of DFSPH (SPlisHSPlasH's form):
+    // kappa_i <- max(kappa_i - 0.5 (s_i - (A kappa)_i) alpha_i / hPow, 0), where
+    // (A kappa)_i = hPow * sum_j V (a_i - a_j) . grad W_ij is the density change the
+    // pressure accelerations cause. Stops when the mean residual is below eta.
+    const size_t n = sim_.size();
+    const Real hp = Real(hPow), invHp = Real(1 / hPow);
+    const std::vector<Vec3>& a = sim_.accelerations();
+    std::vector<Real>& residual = residual_;
+    residual.resize(n);
+    int it = 0;
+    double err = 0;
+    for (; it < sim_.scene().solver.maxIterations; ++it) {
+        sim_.pressureAccelerations(kappa);
+        forEachParticle(n, [&](size_t i) {
+            const Real Ap = hp * sim_.divergence(i, a);
+            const Real r = source[i] - Ap;
+            kappa[i] = std::max(kappa[i] - Real(0.5) * r * alpha_[i] * invHp, Real(0));
+            // Sparse particles (near the free surface) do not count toward divergence error.
+            const bool counts = densitySolve || neighborCount(i) >= kDenseNeighborhood;
+            residual[i] = counts ? std::max(-r, Real(0)) : 0;
+        });
+        err = deterministicSum(n, [&](size_t i) { return double(residual[i]); }) / double(std::max<size_t>(n, 1));
+        if (it + 1 >= minIterations && err <= eta) {
+            ++it;
+            break;
+        }
+    }
+    if (densitySolve) sim_.solverStats().densityError = err;
+    return it;
+}
+
+void DfsphSolver::solveDivergence(double dt) {
+    const size_t n = sim_.size();
+    std::vector<Vec3>& v = sim_.solverVelocities();
+    const std::vector<Vec3>& a = sim_.accelerations();
+    if (kappaV_.size() != n) kappaV_.assign(n, Real(0));
+    source_.resize(n);
+    forEachParticle(n, [&](size_t i) {
+        Real div = sim_.divergence(i, v);
+        // Only compression is corrected, and not at the sparse free surface.
+        if (neighborCount(i) < kDenseNeighborhood || div < 0) div = 0;
+        source_[i] = -div;
+        // Warm start from the previous step's solution (stored times dt).
+        kappaV_[i] = div > 0 ? Real(0.5) * std::min(kappaV_[i], Real(0.5)) / Real(dt) : 0;
+    });
+    const double eta = sim_.scene().solver.maxDivergenceError / dt;
+    sim_.solverStats().divergenceIterations = relaxedJacobi(kappaV_, source_, dt, eta, 1, false);
+    sim_.pressureAccelerations(kappaV_);
+    forEachParticle(n, [&](size_t i) {
+        v[i] += Real(dt) * a[i];
+        kappaV_[i] *= Real(dt);
+    });
+}
+
+void DfsphSolver::solveDensity(double dt) {
+    const size_t n = sim_.size();
+    const Real rho0 = Real(sim_.restDensity());
+    const Real h2 = Real(dt * dt);
+    std::vector<Vec3>& v = sim_.solverVelocities();
+    std::vector<Real>& p = sim_.solverPressures();
+    const std::vector<Real>& rho = sim_.densities();
+    const std::vector<Vec3>& a = sim_.accelerations();
+    kappa_.resize(n);
+    source_.resize(n);
+    forEachParticle(n, [&](size_t i) {
+        // Predicted density; expansion is left alone (free surface).
+        const Real predicted = std::max(rho[i] / rho0 + Real(dt) * sim_.divergence(i, v), Real(1));
+        source_[i] = 1 - predicted;
+        // Warm start from half the previous step's pressure (as SPlisHSPlasH does: a full
+        // restart overshoots). Starting from the pressure, which every frame file stores,
+        // rather than from a private solver array keeps resumed runs identical.
+        kappa_[i] = predicted > 1 ? Real(0.5) * std::min(p[i] * rho0 / (rho[i] * rho[i]), Real(0.00025) / h2) : 0;
+    });
+    sim_.solverStats().pressureIterations =
+        relaxedJacobi(kappa_, source_, dt * dt, sim_.scene().solver.maxDensityError, 2, true);
+    sim_.pressureAccelerations(kappa_);
+    forEachParticle(n, [&](size_t i) {
+        v[i] += Real(dt) * a[i];
+        // kappa = p / rho^2 normalized by rho0, so p = kappa rho^2 / rho0.
+        p[i] = kappa_[i] * rho[i] * rho[i] / rho0;
+    });
+}
+
+} // namespace
+
+std::unique_ptr<PressureSolver> makeDfsphSolver(FluidSimulation& sim) {
+    return std::make_unique<DfsphSolver>(sim);
+}
+
+} // namespace ferro

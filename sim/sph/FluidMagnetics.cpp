@@ -1,0 +1,230 @@
+#include "sim/sph/FluidMagnetics.hpp"
+
+#include "sim/magnetics/MagnetizationSolver.hpp"
+#include "sim/core/ParticleLoops.hpp"
+
+#include <tbb/blocked_range.h>
+#include <tbb/parallel_for.h>
+#include <tbb/parallel_reduce.h>
+
+#include <algorithm>
+#include <cmath>
+
+namespace ferro {
+
+namespace {
+
+
+const char* solverName(MagnetizationParams::Solver s) {
+    switch (s) {
+    case MagnetizationParams::Solver::External: return "external";
+    case MagnetizationParams::Solver::Direct: return "direct";
+    case MagnetizationParams::Solver::Tree: return "tree";
+    case MagnetizationParams::Solver::Auto: return "auto";
+    }
+    return "?";
+}
+
+} // namespace
+
+FluidMagnetics::FluidMagnetics(const SimScene& scene, double particleVolume, double spacing)
+    : tracks_(scene.magnets), law_(scene.magnetization), volume_(particleVolume), spacing_(spacing),
+      rho0_(scene.fluid.restDensity), gravity_(scene.solver.gravity.norm()) {
+    if (active() && magnetic()) solver_ = std::make_unique<MagnetizationSolver>(law_);
+}
+
+FluidMagnetics::~FluidMagnetics() = default;
+
+std::vector<Magnet> FluidMagnetics::magnetsAt(double t) const {
+    std::vector<Magnet> out;
+    out.reserve(tracks_.size());
+    for (const MagnetTrack& track : tracks_) out.push_back(track.at(t));
+    return out;
+}
+
+std::vector<Magnet> FluidMagnetics::softenedMagnetsAt(double t) const {
+    std::vector<Magnet> out = magnetsAt(t);
+    // SPH cannot resolve a field that varies over less than a particle spacing, and a
+    // 1/r^3 field with its 1/r^4 gradient near a pole would otherwise blow a particle that
+    // touches it out of the simulation: soften every source over at least one spacing.
+    for (Magnet& m : out) m.softening = std::max(m.softening, spacing_);
+    return out;
+}
+
+bool FluidMagnetics::solveIsStale() const {
+    if (!solved_ || HextSolved_.size() != Hext_.size()) return true;
+    if (law_.resolveEvery > 0) return stepsSinceSolve_ >= size_t(law_.resolveEvery);
+    // Between solves the induced field rides along with the particles. Its error grows with
+    // the fluid's deformation and the magnets' motion; each solve measures the error the
+    // cache had reached (see solve()), which sets how many steps the next cache may live.
+    if (stepsSinceSolve_ >= interval_) return true;
+    // A magnet that moves or changes faster than it did while the interval was measured
+    // (a keyframe jump, a fast fade). The cache follows the applied field's overall
+    // strength (inducedScale_); what that misses is the change of its pattern, which
+    // changes M, and so the Kelvin force, by about the induced share of it.
+    const size_t n = Hext_.size();
+    const Real scale = Real(inducedScale_);
+    const double change2 = deterministicSum(n, [&](size_t i) { return double((Hext_[i] - scale * HextSolved_[i]).squaredNorm()); });
+    const double relChange = extNow2_ > 0 ? std::sqrt(change2 / extNow2_) : 0.0;
+    return inducedShare_ * kelvinShare_ * relChange > 0.5 * law_.tolerance;
+}
+
+void FluidMagnetics::applyLaw() {
+    const double chi0 = law_.susceptibility, Ms = law_.saturation;
+    forEachParticle(H_.size(), [&](size_t i) {
+        const double h = H_[i].cast<double>().norm();
+        M_[i] = h > 0 ? Vec3((H_[i].cast<double>() * (langevinMagnetization(h, chi0, Ms) / h)).cast<Real>())
+                      : Vec3::Zero();
+    });
+}
+
+void FluidMagnetics::solve(const std::vector<Vec3>& x, bool forced) {
+    const size_t n = x.size();
+    // A forced solve (frame start) measures nothing: a resumed run, which has no cache to
+    // measure, then continues with exactly the interval the file recorded.
+    const bool measure = !forced && solved_ && HextSolved_.size() == n && law_.resolveEvery == 0;
+    std::vector<Vec3> predicted;
+    if (measure) {
+        // What the cache would have said now: applied field plus the carried induced field.
+        predicted.resize(n);
+        const Real scale = Real(inducedScale_);
+        forEachParticle(n, [&](size_t i) { predicted[i] = Hext_[i] + scale * Hind_[i]; });
+    }
+    std::vector<Real> volume(n, Real(volume_));
+    const MagnetizationSolver::Stats st = solver_->solve(x, volume, magnets_, H_, M_);
+    forEachParticle(n, [&](size_t i) { Hind_[i] = H_[i] - Hext_[i]; });
+    const double ind2 = deterministicSum(n, [&](size_t i) { return double(Hind_[i].squaredNorm()); });
+    const double tot2 = deterministicSum(n, [&](size_t i) { return double(H_[i].squaredNorm()); });
+    inducedShare_ = tot2 > 0 ? std::sqrt(ind2 / tot2) : 0.0;
+    if (measure && tot2 > 0) {
+        // What the cache's drift would have done to the motion: the error of the Kelvin
+        // acceleration, mu0 J_ext (chi dH) / rho0 with the secant susceptibility chi = M / H,
+        // relative to the accelerations that drive this fluid (gravity, the Kelvin force).
+        // A weak field may drift by many percent without changing anything that moves; a
+        // strong one is re-solved as often as its force needs. The error is assumed to grow
+        // linearly with the steps since the last solve; the next cache lives until it would
+        // reach half the tolerance, and the interval at most doubles per solve, so one
+        // lucky measurement cannot stretch it.
+        const double accErr2 = deterministicSum(n, [&](size_t i) {
+            const double h = H_[i].cast<double>().norm();
+            const double chi = h > 0 ? M_[i].cast<double>().norm() / h : 0.0;
+            const Vec3d dM = chi * (H_[i] - predicted[i]).cast<double>();
+            return (fieldGradient(magnets_, x[i].cast<double>()) * dM).squaredNorm();
+        });
+        const double kelvin2 = kelvin_.size() == n ? deterministicSum(n, [&](size_t i) { return double(kelvin_[i].squaredNorm()); }) : 0.0;
+        const double aRef = std::max(gravity_, std::sqrt(kelvin2 / double(n)));
+        const double err = aRef > 0 ? kMu0 / rho0_ * std::sqrt(accErr2 / double(n)) / aRef : 0.0;
+        // Part of that difference is no drift at all: both solves carry the solver's own
+        // error (the tree's approximation, which changes as particles cross cells, and the
+        // stopping residual), a floor that does not grow with the interval. Only what
+        // exceeds it counts as drift (at least a tenth of the difference, so the interval
+        // still grows step by step towards where real drift shows).
+        const double floor = kelvinShare_ * (st.fieldError + lastFieldError_);
+        const double drift = std::max(err - floor, 0.1 * err);
+        const double rate = drift / double(std::max<size_t>(stepsSinceSolve_, 1));
+        const double target = rate > 0 ? 0.5 * law_.tolerance / rate : 1e9;
+        interval_ = size_t(std::clamp(std::floor(target), 1.0, double(std::min<size_t>(2 * interval_, kMaxInterval))));
+        stats_.cacheError = err;
+    }
+    lastFieldError_ = st.fieldError;
+    HextSolved_ = Hext_;
+    extSolved2_ = deterministicSum(n, [&](size_t i) { return double(Hext_[i].squaredNorm()); });
+    inducedScale_ = 1;
+    stepsSinceSolve_ = 1; // steps that use this solve, this one included
+    solved_ = true;
+    ++stats_.solves;
+    stats_.solver = solverName(st.solver);
+    stats_.iterations = st.iterations;
+    stats_.estimatedError = st.fieldError;
+}
+
+void FluidMagnetics::update(double t, const std::vector<Vec3>& x, const NeighborLists& nbr, bool forceSolve) {
+    if (!active()) return;
+    const size_t n = x.size();
+    magnets_ = softenedMagnetsAt(t);
+    Hext_.resize(n);
+    H_.resize(n, Vec3::Zero());
+    M_.resize(n, Vec3::Zero());
+    Hind_.resize(n, Vec3::Zero());
+    forEachParticle(n, [&](size_t i) { Hext_[i] = magnetField(magnets_, x[i].cast<double>()).cast<Real>(); });
+    ++stats_.steps;
+    if (!magnetic()) {
+        H_ = Hext_;
+        std::fill(M_.begin(), M_.end(), Vec3::Zero());
+        kelvin_.clear();
+        maxAcceleration_ = 0;
+        return;
+    }
+    if (!(forceSolve || !solved_)) {
+        extNow2_ = deterministicSum(n, [&](size_t i) { return double(Hext_[i].squaredNorm()); });
+        inducedScale_ = extSolved2_ > 0 ? std::sqrt(extNow2_ / extSolved2_) : 1.0;
+    }
+    const bool solving = forceSolve || solveIsStale();
+    if (solving) {
+        solve(x, forceSolve);
+    } else {
+        // Between solves: the cached induced field, the current applied field, the law.
+        // The induced field is proportional to M, which follows the applied field: the
+        // cache is scaled with the applied field's RMS strength (inducedScale_, exact for
+        // a fading magnet in the linear regime); the drift measurement catches the rest.
+        const Real scale = Real(inducedScale_);
+        forEachParticle(n, [&](size_t i) { H_[i] = Hext_[i] + scale * Hind_[i]; });
+        applyLaw();
+        ++stepsSinceSolve_;
+    }
+    computeKelvin(x, nbr);
+    if (solving) {
+        // How much the Kelvin force matters beside gravity (see solveIsStale()).
+        const double kelvin2 = deterministicSum(n, [&](size_t i) { return double(kelvin_[i].squaredNorm()); });
+        const double rms = std::sqrt(kelvin2 / double(std::max<size_t>(n, 1)));
+        const double aRef = std::max(gravity_, rms);
+        kelvinShare_ = aRef > 0 ? rms / aRef : 1.0;
+    }
+}
+
+void FluidMagnetics::computeKelvin(const std::vector<Vec3>& x, const NeighborLists& nbr) {
+    const size_t n = x.size();
+    kelvin_.resize(n);
+    const Real scale = Real(kMu0 / rho0_);
+    const Real V = Real(volume_);
+    const bool pairs = law_.inducedForce && nbr.count.size() == n && nbr.hasGradients();
+    forEachParticle(n, [&](size_t i) {
+        // grad H = analytic Jacobian of the magnets (+ SPH difference gradient of the
+        // induced field with magnetization.induced_force).
+        Eigen::Matrix3f J = fieldGradient(magnets_, x[i].cast<double>()).cast<Real>();
+        const Vec3 hi = Hind_[i];
+        if (pairs)
+            for (uint32_t k = nbr.begin(i); k < nbr.end(i); ++k)
+                J += (Real(inducedScale_) * V * (Hind_[nbr.index[k]] - hi)) * nbr.gradW[k].transpose();
+        kelvin_[i] = scale * (J * M_[i]);
+    });
+    maxAcceleration_ = std::sqrt(double(tbb::parallel_reduce(
+        tbb::blocked_range<size_t>(0, n, 4096), Real(0),
+        [&](const tbb::blocked_range<size_t>& r, Real m) {
+            for (size_t i = r.begin(); i != r.end(); ++i) m = std::max(m, kelvin_[i].squaredNorm());
+            return m;
+        },
+        [](Real a, Real b) { return std::max(a, b); })));
+}
+
+void FluidMagnetics::addKelvinAcceleration(std::vector<Vec3>& a) const {
+    if (kelvin_.size() != a.size()) return;
+    forEachParticle(a.size(), [&](size_t i) { a[i] += kelvin_[i]; });
+}
+
+void FluidMagnetics::permute(const std::vector<uint32_t>& order) {
+    ferro::permute(Hext_, order);
+    ferro::permute(Hind_, order);
+    ferro::permute(H_, order);
+    ferro::permute(M_, order);
+    ferro::permute(kelvin_, order);
+    ferro::permute(HextSolved_, order);
+}
+
+void FluidMagnetics::setState(const std::vector<Vec3>& H, const std::vector<Vec3>& M) {
+    H_ = H;
+    M_ = M;
+    solved_ = false;
+}
+
+} // namespace ferro

@@ -1,0 +1,840 @@
+#include "sim/sph/FluidSimulation.hpp"
+
+#include "sim/core/ParticleLoops.hpp"
+#include "sim/core/SceneDocument.hpp"
+
+#include <tbb/blocked_range.h>
+#include <tbb/parallel_for.h>
+#include <tbb/parallel_reduce.h>
+
+#include <algorithm>
+#include <atomic>
+#include <cmath>
+#include <sstream>
+
+#if defined(__SSE2__)
+#include <emmintrin.h>
+#endif
+
+namespace ferro {
+
+namespace {
+
+constexpr size_t kGrain = 256;
+
+/// Weight of Akinci's cohesion term against the curvature term. Akinci's cohesion is
+/// gamma m_j C(r), which is not dimensionally consistent with the curvature term; with
+/// V_j C(r) (dimensionless) in its place, 1000 restores the balance Akinci and
+/// SPlisHSPlasH tuned for water in SI units.
+constexpr Real kCohesionWeight = 1000;
+
+std::string fmtVec(const Vec3d& p) {
+    std::ostringstream s;
+    s.precision(5);
+    s << "(" << p.x() << ", " << p.y() << ", " << p.z() << ")";
+    return s.str();
+}
+
+/// Lattice points of a block at spacing s, offset s/2 from its faces.
+void latticeOfBlock(const FluidBlock& b, double s, std::vector<Vec3d>& out) {
+    out.clear();
+    Vec3d lo, hi;
+    if (b.shape == FluidBlock::Shape::Box) {
+        lo = b.min;
+        hi = b.max;
+    } else {
+        lo = b.center - Vec3d(b.radius, b.radius, 0);
+        hi = b.center + Vec3d(b.radius, b.radius, b.height);
+    }
+    int n[3];
+    for (int a = 0; a < 3; ++a) n[a] = std::max(0, int(std::floor((hi[a] - lo[a]) / s + 1e-9)));
+    // Centre the lattice in the block so the leftover gap is split on both sides.
+    Vec3d start;
+    for (int a = 0; a < 3; ++a) start[a] = 0.5 * (lo[a] + hi[a]) - 0.5 * (n[a] - 1) * s;
+    const double r2 = (b.radius - 0.5 * s) * (b.radius - 0.5 * s);
+    for (int k = 0; k < n[2]; ++k)
+        for (int j = 0; j < n[1]; ++j)
+            for (int i = 0; i < n[0]; ++i) {
+                const Vec3d p = start + s * Vec3d(i, j, k);
+                if (b.shape == FluidBlock::Shape::Cylinder) {
+                    const double dx = p.x() - b.center.x(), dy = p.y() - b.center.y();
+                    if (dx * dx + dy * dy > r2) continue;
+                }
+                out.push_back(p);
+            }
+}
+
+double blockVolume(const FluidBlock& b) {
+    if (b.shape == FluidBlock::Shape::Box) return (b.max - b.min).prod();
+    return kPi * b.radius * b.radius * b.height;
+}
+
+} // namespace
+
+namespace {
+
+/// Appends to `out` the indices j in [begin, end) with |x_j - p|^2 < h2, skipping `self`.
+/// Positions come as separate coordinate arrays so that blocks of 8 candidates are tested
+/// with SIMD into a bit mask and only the hits (about one in seven) are appended; the tail
+/// appends branch-free (write always, advance on a hit). An unpredictable branch per
+/// candidate used to dominate the search.
+inline uint32_t gatherRange(const Real* px, const Real* py, const Real* pz, uint32_t begin, uint32_t end,
+                            const Vec3& p, Real h2, uint32_t self, uint32_t* out, uint32_t count) {
+    const Real x = p.x(), y = p.y(), z = p.z();
+    uint32_t j = begin;
+#if defined(__SSE2__)
+    // SSE is part of x86-64: four distance tests per instruction, hits as a bit mask.
+    const __m128 vx = _mm_set1_ps(x), vy = _mm_set1_ps(y), vz = _mm_set1_ps(z), vh2 = _mm_set1_ps(h2);
+    for (; j + 8 <= end; j += 8) {
+        uint32_t mask = 0;
+        for (uint32_t l = 0; l < 8; l += 4) {
+            const __m128 dx = _mm_sub_ps(_mm_loadu_ps(px + j + l), vx);
+            const __m128 dy = _mm_sub_ps(_mm_loadu_ps(py + j + l), vy);
+            const __m128 dz = _mm_sub_ps(_mm_loadu_ps(pz + j + l), vz);
+            const __m128 d2 = _mm_add_ps(_mm_add_ps(_mm_mul_ps(dx, dx), _mm_mul_ps(dy, dy)), _mm_mul_ps(dz, dz));
+            mask |= uint32_t(_mm_movemask_ps(_mm_cmplt_ps(d2, vh2))) << l;
+        }
+        if (self - j < 8) mask &= ~(1u << (self - j));
+        while (mask) {
+            out[count++] = j + uint32_t(__builtin_ctz(mask));
+            mask &= mask - 1;
+        }
+    }
+#endif
+    for (; j < end; ++j) {
+        const Real dx = px[j] - x, dy = py[j] - y, dz = pz[j] - z;
+        out[count] = j;
+        count += uint32_t((dx * dx + dy * dy + dz * dz < h2) & (j != self));
+    }
+    return count;
+}
+
+/// Neighbours of `p` among the points of `grid` (coordinates px/py/pz), into `out`, which
+/// must hold `room` entries. Returns the count, or room + 1 if they did not fit.
+inline uint32_t gatherNeighbors(const SortedGrid& grid, const Real* px, const Real* py, const Real* pz,
+                                const Vec3& p, Real radius, uint32_t self, uint32_t* out, uint32_t room) {
+    uint32_t count = 0;
+    const Real h2 = radius * radius;
+    grid.forEachCandidateRange(p, [&](uint32_t beg, uint32_t end) {
+        if (count > room) return;
+        if (count + (end - beg) > room) {
+            count = room + 1;
+            return;
+        }
+        count = gatherRange(px, py, pz, beg, end, p, h2, self, out, count);
+    });
+    return count;
+}
+
+#if defined(__SSE2__)
+/// a[j[0..3]] in four lanes.
+inline __m128 gather4(const Real* a, const uint32_t* j) { return _mm_set_ps(a[j[3]], a[j[2]], a[j[1]], a[j[0]]); }
+
+/// Component c of v[j[0..3]] in four lanes.
+inline __m128 gather4(const Vec3* v, const uint32_t* j, int c) {
+    return _mm_set_ps(v[j[3]][c], v[j[2]][c], v[j[1]][c], v[j[0]][c]);
+}
+
+/// Offsets x_i - x_j to four points j (coordinates split into px, py, pz) and their squared
+/// lengths, for the loops that take four pairs at a time.
+struct PairOffsets4 {
+    __m128 dx, dy, dz, r2;
+    PairOffsets4(const Vec3& xi, const Real* px, const Real* py, const Real* pz, const uint32_t* j)
+        : dx(_mm_sub_ps(_mm_set1_ps(xi.x()), gather4(px, j))),
+          dy(_mm_sub_ps(_mm_set1_ps(xi.y()), gather4(py, j))),
+          dz(_mm_sub_ps(_mm_set1_ps(xi.z()), gather4(pz, j))),
+          r2(_mm_add_ps(_mm_add_ps(_mm_mul_ps(dx, dx), _mm_mul_ps(dy, dy)), _mm_mul_ps(dz, dz))) {}
+};
+#endif
+
+void splitCoordinates(const std::vector<Vec3>& x, std::vector<Real>& px, std::vector<Real>& py,
+                      std::vector<Real>& pz) {
+    px.resize(x.size());
+    py.resize(x.size());
+    pz.resize(x.size());
+    for (size_t i = 0; i < x.size(); ++i) {
+        px[i] = x[i].x();
+        py[i] = x[i].y();
+        pz[i] = x[i].z();
+    }
+}
+
+} // namespace
+
+FluidSeed seedFluid(const SimScene& scene, const Container& container) {
+    FluidSeed seed;
+    const auto& blocks = scene.fluid.blocks;
+    seed.spacing = scene.fluid.spacing;
+    std::vector<Vec3d> pts;
+    if (seed.spacing <= 0) {
+        // Derive the spacing from the first block with a count: the largest spacing
+        // whose lattice still holds that many particles (found by bisection).
+        const FluidBlock* first = nullptr;
+        for (const auto& b : blocks)
+            if (b.count > 0) { first = &b; break; }
+        if (!first) throw SceneError(scene.path + ": fluid.spacing: set a spacing or a block count");
+        const double guess = std::cbrt(blockVolume(*first) / double(first->count));
+        double lo = 0.5 * guess, hi = 1.5 * guess;
+        for (int it = 0; it < 60; ++it) {
+            const double mid = 0.5 * (lo + hi);
+            latticeOfBlock(*first, mid, pts);
+            (long(pts.size()) >= first->count ? lo : hi) = mid;
+        }
+        seed.spacing = lo;
+    }
+    const double s = seed.spacing;
+    for (size_t bi = 0; bi < blocks.size(); ++bi) {
+        const FluidBlock& b = blocks[bi];
+        const std::string key = "fluid.block[" + std::to_string(bi) + "]";
+        latticeOfBlock(b, s, pts);
+        if (b.count > 0) {
+            if (long(pts.size()) < b.count)
+                throw SceneError(b.where + ": " + key + ".count: the block holds only " +
+                                 std::to_string(pts.size()) + " particles at spacing " +
+                                 std::to_string(s) + " m (asked " + std::to_string(b.count) + ")");
+            // Keep the lowest particles: the trimmed layer is the free surface.
+            std::stable_sort(pts.begin(), pts.end(), [](const Vec3d& a, const Vec3d& c) { return a.z() < c.z(); });
+            pts.resize(size_t(b.count));
+        }
+        if (pts.empty())
+            throw SceneError(b.where + ": " + key + ": block is smaller than one particle spacing");
+        for (const Vec3d& p : pts) {
+            if (!container.contains(p, 0.25 * s))
+                throw SceneError(b.where + ": " + key + ": fluid outside the container (particle at " +
+                                 fmtVec(p) + ")");
+            seed.positions.push_back(p.cast<Real>());
+            seed.velocities.push_back(b.velocity.cast<Real>());
+        }
+    }
+    if (seed.positions.size() >= (size_t(1) << 32) - 1) throw SceneError(scene.path + ": too many particles");
+    return seed;
+}
+
+FluidSimulation::FluidSimulation(const SimScene& scene)
+    : scene_(scene), container_(makeContainer(scene.container, scene.path)) {
+    FluidSeed seed = seedFluid(scene_, *container_);
+    spacing_ = seed.spacing;
+    h_ = 2 * spacing_;
+    kernel_ = CubicSplineKernel(Real(h_));
+    cohesion_ = CohesionKernel(Real(h_));
+    rho0_ = scene_.fluid.restDensity;
+
+    // Particle volume: the inverse kernel sum of a full cubic lattice, so that a particle
+    // inside the initial block sits exactly at rest density (no start-up jolt).
+    double lattice = 0;
+    for (int k = -2; k <= 2; ++k)
+        for (int j = -2; j <= 2; ++j)
+            for (int i = -2; i <= 2; ++i)
+                lattice += kernel_.W(Real(spacing_ * std::sqrt(double(i * i + j * j + k * k))));
+    volume_ = 1.0 / lattice;
+    mass_ = rho0_ * volume_;
+
+    x_ = std::move(seed.positions);
+    v_ = std::move(seed.velocities);
+    const size_t n = x_.size();
+    id_.resize(n);
+    for (size_t i = 0; i < n; ++i) id_[i] = uint32_t(i);
+    a_.assign(n, Vec3::Zero());
+    rho_.assign(n, Real(rho0_));
+    p_.assign(n, 0);
+
+    // The pressure solver says how it sweeps the neighbour lists: DFSPH sweeps them a
+    // dozen times a step and keeps each pair's kernel gradient (so does the induced Kelvin
+    // force); WCSPH sweeps them once and takes small steps, so it evaluates the kernel in
+    // its sweep and searches only when a Verlet skin is used up.
+    try {
+        solverEntry_ = &findPressureSolver(scene_.solver.pressureSolver);
+    } catch (const std::invalid_argument&) {
+        std::string list;
+        for (const std::string& name : pressureSolverNames()) list += (list.empty() ? "\"" : ", \"") + name + "\"";
+        const std::string& where = scene_.solver.pressureSolverWhere;
+        throw SceneError((where.empty() ? scene_.path : where) + ": sim.solver: must be one of " + list +
+                         " (got \"" + scene_.solver.pressureSolver + "\")");
+    }
+    solver_ = solverEntry_->make(*this);
+    storeGradients_ = solver_->storesGradients() || scene_.magnetization.inducedForce;
+    skin_ = solver_->neighborSkin() * h_;
+
+    // Boundary particles and their Akinci volumes V_b = 1 / sum_k W_bk.
+
+    bx_ = container_->sampleWalls(spacing_, 0.5 * spacing_);
+    {
+        std::vector<uint32_t> tie(bx_.size()), order;
+        for (size_t i = 0; i < tie.size(); ++i) tie[i] = uint32_t(i);
+        // Cells as wide as the search radius: the 3 x 3 x 3 stencil then holds every
+        // candidate (the Akinci volumes below test r < h themselves).
+        bGrid_.sort(bx_, tie, Real(h_ + skin_), order);
+        std::vector<Vec3> sorted(bx_.size());
+        for (size_t k = 0; k < order.size(); ++k) sorted[k] = bx_[order[k]];
+        bx_.swap(sorted);
+        bGrid_.index(bx_, bGrid_.geometry());
+        splitCoordinates(bx_, bpx_, bpy_, bpz_);
+    }
+    // Akinci's volume 1 / sum_k W_bk adapts to how densely a wall is sampled. Scaled by
+    // V * P0 (P0: the kernel sum of a square lattice plane at this spacing), a flat wall
+    // sampled at the fluid spacing gets exactly the fluid particle volume V: the wall layer
+    // then stands in for the mirror image of the first fluid layer, and fluid half a
+    // spacing from the wall is at rest density.
+    double plane = 0;
+    for (int j = -2; j <= 2; ++j)
+        for (int i = -2; i <= 2; ++i) plane += kernel_.W(Real(spacing_ * std::sqrt(double(i * i + j * j))));
+    const Real wallScale = Real(volume_ * plane);
+    bVolume_.assign(bx_.size(), 0);
+    const Real h2 = Real(h_ * h_);
+    forEachParticle(bx_.size(), [&](size_t b) {
+        Real sum = 0;
+        bGrid_.forEachCandidateRange(bx_[b], [&](uint32_t beg, uint32_t end) {
+            for (uint32_t k = beg; k < end; ++k) {
+                const Real r2 = (bx_[b] - bx_[k]).squaredNorm();
+                if (r2 < h2) sum += kernel_.W(std::sqrt(r2));
+            }
+        });
+        bVolume_[b] = wallScale / sum;
+    });
+
+    // Speed of sound for WCSPH: ten times the fastest expected flow speed keeps the
+    // density error near 1 % (Monaghan). The speed is the free-fall speed over the fluid's
+    // height above the container floor, or the initial speed, or the capillary speed.
+    const Vec3d g = scene_.solver.gravity;
+    const double gNorm = g.norm();
+    double vExpected = std::sqrt(std::max(0.0, scene_.fluid.surfaceTension) / (rho0_ * spacing_));
+    if (gNorm > 0) {
+        const Vec3d down = g / gNorm;
+        Vec3d lo, hi;
+        container_->bounds(lo, hi);
+        double top = -1e300, bottom = 1e300;
+        for (const Vec3& p : x_) {
+            top = std::max(top, -p.cast<double>().dot(down));
+            bottom = std::min(bottom, -p.cast<double>().dot(down));
+        }
+        if (scene_.container.type != ContainerParams::Type::None) {
+            // The lowest corner of the container along gravity.
+            for (int c = 0; c < 8; ++c) {
+                const Vec3d corner((c & 1) ? hi.x() : lo.x(), (c & 2) ? hi.y() : lo.y(), (c & 4) ? hi.z() : lo.z());
+                bottom = std::min(bottom, std::max(-corner.dot(down), bottom - 10 * (top - bottom)));
+            }
+        }
+        vExpected = std::max(vExpected, std::sqrt(2 * gNorm * std::max(top - bottom, spacing_)));
+    }
+    for (const Vec3& v : v_) vExpected = std::max(vExpected, double(v.norm()));
+    soundSpeed_ = scene_.solver.soundSpeed > 0 ? scene_.solver.soundSpeed : 10 * std::max(vExpected, 0.1);
+    viscosity_ = scene_.fluid.viscosity + scene_.solver.artificialViscosity * h_ * std::max(vExpected, 0.01);
+
+    // Surface tension (Akinci 2013): the coefficient gamma [m/s^2] of its cohesion and
+    // curvature terms scales as sigma / (rho0 s^2). Akinci's model has no physical
+    // coefficient; kSurfaceTensionCalibration is measured on a free droplet (radius 11
+    // spacings, zero gravity) so that its interior pressure grows with sigma as the Laplace
+    // pressure 2 sigma / R (tests/test_surface_tension.cpp checks it within 25 %).
+    constexpr double kSurfaceTensionCalibration = 0.0029;
+    gamma_ = kSurfaceTensionCalibration * scene_.fluid.surfaceTension / (rho0_ * spacing_ * spacing_);
+    // Capillary wave time step limit (Brackbill et al. 1992).
+    if (scene_.fluid.surfaceTension > 0)
+        capillaryDt_ = std::sqrt(rho0_ * spacing_ * spacing_ * spacing_ / (2 * kPi * scene_.fluid.surfaceTension));
+
+    if (!scene_.magnets.empty()) magnetics_ = std::make_unique<FluidMagnetics>(scene_, volume_, spacing_);
+
+    refreshNeighbors(true);
+    // The field of the initial state, so that frame 0 carries H and M too.
+    if (magnetics_) magnetics_->update(time_, x_, fluidNbr_, true);
+}
+
+FluidSimulation::~FluidSimulation() = default;
+
+void FluidSimulation::refreshNeighbors(bool forceSearch) {
+    // A new search only when some pair may have closed the skin: two particles that each
+    // moved less than half the skin since the search are still in each other's slots.
+    bool search = forceSearch || skin_ <= 0 || xSearch_.size() != x_.size();
+    if (!search) {
+        const Real moved2 = tbb::parallel_reduce(
+            tbb::blocked_range<size_t>(0, x_.size(), 4096), Real(0),
+            [&](const tbb::blocked_range<size_t>& r, Real m) {
+                for (size_t i = r.begin(); i != r.end(); ++i) m = std::max(m, (x_[i] - xSearch_[i]).squaredNorm());
+                return m;
+            },
+            [](Real a, Real b) { return std::max(a, b); });
+        // (A non-finite position never gets here: integratePositions stops the run.)
+        search = !(4 * double(moved2) < skin_ * skin_);
+    }
+    if (search) searchCandidates();
+    updateNeighbors();
+}
+
+void FluidSimulation::searchCandidates() {
+    const size_t n = x_.size();
+    // Cells as wide as the search radius, so that the 3 x 3 x 3 stencil holds every
+    // candidate within the support plus the skin.
+    const Real radius = Real(h_ + skin_);
+    grid_.sort(x_, id_, radius, order_);
+    permute(x_, order_);
+    permute(v_, order_);
+    permute(id_, order_);
+    solver_->permute(order_);
+    permute(p_, order_);
+    if (magnetics_) magnetics_->permute(order_);
+    grid_.index(x_, grid_.geometry());
+    splitCoordinates(x_, px_, py_, pz_);
+    xSearch_ = x_;
+    searchStep_ = steps_;
+    ++stats_.searches;
+
+    const bool haveBoundary = !bx_.empty();
+
+    // Candidates within the support plus the skin, into fixed-capacity scratch lists. The
+    // candidate buffer is generous (every candidate is written before it is tested); only
+    // the hits are kept, and the capacity grows if one overflows.
+    std::vector<uint32_t> fluidCount(n), boundaryCount(n);
+    constexpr uint32_t kRoom = 4096;
+    for (;;) {
+        scratch_.resize(n * capacity_);
+        bScratch_.resize(n * bCapacity_);
+        std::atomic<bool> overflow{false};
+        tbb::parallel_for(tbb::blocked_range<size_t>(0, n, kGrain), [&](const tbb::blocked_range<size_t>& r) {
+            std::vector<uint32_t> buffer(kRoom + 1);
+            for (size_t i = r.begin(); i != r.end(); ++i) {
+                uint32_t cnt = gatherNeighbors(grid_, px_.data(), py_.data(), pz_.data(), x_[i], radius,
+                                               uint32_t(i), buffer.data(), kRoom);
+                if (cnt > capacity_) overflow = true;
+                std::copy_n(buffer.data(), std::min<uint32_t>(cnt, uint32_t(capacity_)), &scratch_[i * capacity_]);
+                fluidCount[i] = cnt;
+                cnt = 0;
+                if (haveBoundary) {
+                    cnt = gatherNeighbors(bGrid_, bpx_.data(), bpy_.data(), bpz_.data(), x_[i], radius,
+                                          uint32_t(-1), buffer.data(), kRoom);
+                    if (cnt > bCapacity_) overflow = true;
+                    std::copy_n(buffer.data(), std::min<uint32_t>(cnt, uint32_t(bCapacity_)), &bScratch_[i * bCapacity_]);
+                }
+                boundaryCount[i] = cnt;
+            }
+        });
+        if (!overflow) break;
+        // Grow to the largest count seen (a few extra for the next steps). More than kRoom
+        // candidates means particles piled up far beyond any SPH density: stop, do not loop.
+        for (size_t i = 0; i < n; ++i) {
+            if (fluidCount[i] > kRoom || boundaryCount[i] > kRoom) {
+                std::ostringstream msg;
+                msg << "particle " << id_[i] << " has more than " << kRoom << " neighbour candidates at t = " << time_
+                    << " s: the fluid collapsed (time step too large or forces too strong)";
+                throw SimulationError(msg.str());
+            }
+            if (fluidCount[i] > capacity_) capacity_ = std::min<size_t>(fluidCount[i] + 16, kRoom);
+            if (boundaryCount[i] > bCapacity_) bCapacity_ = std::min<size_t>(boundaryCount[i] + 16, kRoom);
+        }
+    }
+    // One slot per candidate; the candidates themselves are kept for the steps until the
+    // next search.
+    auto slots = [&](const std::vector<uint32_t>& count, const std::vector<uint32_t>& scratch, size_t capacity,
+                     NeighborLists& lists, std::vector<uint32_t>& candidates) {
+        lists.offset.resize(n + 1);
+        lists.offset[0] = 0;
+        for (size_t i = 0; i < n; ++i) lists.offset[i + 1] = lists.offset[i] + count[i];
+        const size_t total = lists.offset[n];
+        candidates.resize(total);
+        lists.index.resize(total);
+        lists.count.resize(n);
+        if (storeGradients_) lists.gradW.resize(total);
+        else lists.gradW.clear();
+        forEachParticle(n, [&](size_t i) { std::copy_n(&scratch[i * capacity], count[i], &candidates[lists.offset[i]]); });
+    };
+    slots(fluidCount, scratch_, capacity_, fluidNbr_, fluidCandidates_);
+    slots(boundaryCount, bScratch_, bCapacity_, boundaryNbr_, boundaryCandidates_);
+    stats_.candidatePairs = fluidCandidates_.size();
+}
+
+void FluidSimulation::updateNeighbors() {
+    // The neighbours of this step among the candidates (closer than the support), with
+    // each pair's kernel gradient when the solver keeps them, and the density.
+    const size_t n = x_.size();
+    rho_.resize(n);
+    const Real V = Real(volume_);
+    const Real h2 = Real(h_ * h_);
+    const bool storeGradients = storeGradients_;
+#if defined(__SSE2__)
+    const CubicSplineKernel4 kernel4(kernel_);
+#endif
+    // Compacts particle i's candidates in `lists` (points at qx, qy, qz) to its neighbours;
+    // returns sum_j V_j W_ij with V_j = volume[j], or V when volume is null. Branch-free:
+    // every candidate is written to the next free slot, which advances only for a
+    // neighbour (about 55 % are), and a candidate beyond the support adds W = 0.
+    auto compact = [&](size_t i, NeighborLists& lists, const std::vector<uint32_t>& candidates, const Real* qx,
+                       const Real* qy, const Real* qz, const Real* volume) {
+        const Vec3 xi = x_[i];
+        const uint32_t o = lists.offset[i], slots = lists.offset[i + 1] - o;
+        const uint32_t* cand = candidates.data() + o;
+        uint32_t* out = lists.index.data() + o;
+        Vec3* grad = storeGradients ? lists.gradW.data() + o : nullptr;
+        uint32_t cnt = 0, k = 0;
+        Real sum = 0;
+#if defined(__SSE2__)
+        const __m128 h24 = _mm_set1_ps(h2);
+        __m128 sum4 = _mm_setzero_ps();
+        for (; k + 4 <= slots; k += 4) {
+            const uint32_t* c = cand + k;
+            const PairOffsets4 d(xi, qx, qy, qz, c);
+            const __m128 r = _mm_sqrt_ps(d.r2);
+            const __m128 vol = volume ? gather4(volume, c) : _mm_set1_ps(V);
+            sum4 = _mm_add_ps(sum4, _mm_mul_ps(vol, kernel4.W(r)));
+            const int hit = _mm_movemask_ps(_mm_cmplt_ps(d.r2, h24));
+            if (grad) {
+                const __m128 sc = kernel4.gradFactor(r);
+                alignas(16) float gx[4], gy[4], gz[4];
+                _mm_store_ps(gx, _mm_mul_ps(sc, d.dx));
+                _mm_store_ps(gy, _mm_mul_ps(sc, d.dy));
+                _mm_store_ps(gz, _mm_mul_ps(sc, d.dz));
+                for (int l = 0; l < 4; ++l) {
+                    out[cnt] = c[l];
+                    grad[cnt] = Vec3(gx[l], gy[l], gz[l]);
+                    cnt += uint32_t(hit >> l) & 1u;
+                }
+            } else {
+                for (int l = 0; l < 4; ++l) {
+                    out[cnt] = c[l];
+                    cnt += uint32_t(hit >> l) & 1u;
+                }
+            }
+        }
+        sum = horizontalSum(sum4);
+#endif
+        for (; k < slots; ++k) {
+            const uint32_t j = cand[k];
+            const Vec3 d(xi.x() - qx[j], xi.y() - qy[j], xi.z() - qz[j]);
+            const Real r2 = d.squaredNorm();
+            out[cnt] = j;
+            Real w;
+            if (grad) kernel_.evaluate(d, r2, w, grad[cnt]);
+            else w = kernel_.W(std::sqrt(r2));
+            sum += (volume ? volume[j] : V) * w;
+            cnt += uint32_t(r2 < h2);
+        }
+        lists.count[i] = cnt;
+        return sum;
+    };
+    forEachParticle(n, [&](size_t i) {
+        const Real density = V * kernel_.W0() +
+                             compact(i, fluidNbr_, fluidCandidates_, px_.data(), py_.data(), pz_.data(), nullptr) +
+                             compact(i, boundaryNbr_, boundaryCandidates_, bpx_.data(), bpy_.data(), bpz_.data(),
+                                     bVolume_.data());
+        rho_[i] = Real(rho0_) * density;
+    });
+    size_t pairs = 0;
+    for (uint32_t c : fluidNbr_.count) pairs += c;
+    stats_.neighborPairs = pairs;
+}
+
+double FluidSimulation::chooseTimeStep(double dtLimit) const {
+    const size_t n = x_.size();
+    const Real vmax = tbb::parallel_reduce(
+        tbb::blocked_range<size_t>(0, n, 4096), Real(0),
+        [&](const tbb::blocked_range<size_t>& r, Real m) {
+            for (size_t i = r.begin(); i != r.end(); ++i) m = std::max(m, v_[i].squaredNorm());
+            return m;
+        },
+        [](Real a, Real b) { return std::max(a, b); });
+    const double speed = std::sqrt(double(vmax));
+    // Force criterion (Monaghan 1992): dt <= 0.25 sqrt(h / |a|). Gravity alone never binds
+    // at SPH spacings; a strong Kelvin force near a magnet pole does. Both are known at the
+    // step's start, so the step stays a pure function of the state (exact resume).
+    const double amax = scene_.solver.gravity.norm() + (magnetics_ ? magnetics_->maxAcceleration() : 0.0);
+    const SolverParams& sp = scene_.solver;
+    double dt = sp.maxDt;
+    dt = std::min(dt, solver_->maxTimeStep(speed));
+    dt = std::min(dt, capillaryDt_);
+    if (amax > 0) dt = std::min(dt, 0.25 * std::sqrt(h_ / amax));
+    if (viscosity_ > 0) dt = std::min(dt, 0.125 * h_ * h_ / viscosity_);
+    if (dt < sp.minDt) {
+        std::ostringstream msg;
+        msg << "time step " << dt << " s fell below sim.min_dt = " << sp.minDt << " s at t = " << time_
+            << " s (max speed " << speed << " m/s): the simulation is unstable";
+        throw SimulationError(msg.str());
+    }
+    // Land exactly on the limit (a frame time) without leaving a sliver of a step.
+    if (dt >= dtLimit) return dtLimit;
+    if (2 * dt > dtLimit) return 0.5 * dtLimit;
+    return dt;
+}
+
+void FluidSimulation::computeAccelerations(const Real* pOverRho2) {
+    // One sweep a step, for every solver: the kernel is evaluated here (four pairs at a
+    // time), which is cheaper than loading the gradients DFSPH stores for its iterations.
+    const size_t n = x_.size();
+    const Vec3 g = scene_.solver.gravity.cast<Real>();
+    const Real V = Real(volume_);
+    const Real rho0 = Real(rho0_);
+    const Real m = Real(mass_);
+    const Real nu = Real(viscosity_);
+    const Real nuWall = Real(scene_.fluid.viscosity * scene_.container.wallFriction);
+    const Real eps2 = Real(0.01 * h_ * h_);
+    const bool tension = gamma_ > 0;
+    const bool pressure = pOverRho2 != nullptr;
+    if (tension) {
+        // Akinci 2013 surface normals n_i = h sum_j (m / rho_j) grad W_ij.
+        normal_.resize(n);
+#if defined(__SSE2__)
+        const CubicSplineKernel4 kernel4(kernel_);
+#endif
+        forEachParticle(n, [&](size_t i) {
+            Vec3 sum = Vec3::Zero();
+            uint32_t k = fluidNbr_.begin(i);
+            const uint32_t end = fluidNbr_.end(i);
+#if defined(__SSE2__)
+            {
+                const __m128 rho04 = _mm_set1_ps(rho0);
+                __m128 sx = _mm_setzero_ps(), sy = _mm_setzero_ps(), sz = _mm_setzero_ps();
+                for (; k + 4 <= end; k += 4) {
+                    const uint32_t* j = &fluidNbr_.index[k];
+                    const PairOffsets4 d(x_[i], px_.data(), py_.data(), pz_.data(), j);
+                    const __m128 f =
+                        _mm_mul_ps(_mm_div_ps(rho04, gather4(rho_.data(), j)), kernel4.gradFactor(_mm_sqrt_ps(d.r2)));
+                    sx = _mm_add_ps(sx, _mm_mul_ps(f, d.dx));
+                    sy = _mm_add_ps(sy, _mm_mul_ps(f, d.dy));
+                    sz = _mm_add_ps(sz, _mm_mul_ps(f, d.dz));
+                }
+                sum = Vec3(horizontalSum(sx), horizontalSum(sy), horizontalSum(sz));
+            }
+#endif
+            for (; k < end; ++k) {
+                const uint32_t j = fluidNbr_.index[k];
+                const Vec3 xij = x_[i] - x_[j];
+                sum += (rho0 / rho_[j]) * kernel_.gradW(xij, xij.norm());
+            }
+            normal_[i] = Real(h_) * V * sum;
+        });
+    }
+    const Real gamma = Real(gamma_);
+#if defined(__SSE2__)
+    const CubicSplineKernel4 kernel4(kernel_);
+    const CohesionKernel4 cohesion4(cohesion_);
+#endif
+    forEachParticle(n, [&](size_t i) {
+        Vec3 acc = g;
+        const Vec3 xi = x_[i], vi = v_[i];
+        const Real rhoi = rho_[i];
+        const Real pi = pressure ? pOverRho2[i] : 0;
+        // Pressure and viscosity both act along grad W_ij, with one scalar per pair:
+        // the WCSPH pressure -m (p_i / rho_i^2 + p_j / rho_j^2), symmetric in i and j, and
+        // the viscosity of Monaghan / SPlisHSPlasH, 10 nu V_ij (v_ij . x_ij) / (r^2 + eps^2)
+        // with the pair volume V_ij = m / rho_ij at the mean density, symmetric too, so the
+        // pair forces cancel (up to rounding: i may take a pair in the four-lane loop and j
+        // in the scalar tail) and momentum is conserved.
+        const Real viscosityScale = 10 * nu * 2 * V * rho0;
+        uint32_t k = fluidNbr_.begin(i);
+        const uint32_t end = fluidNbr_.end(i);
+#if defined(__SSE2__)
+        {
+            // Four pairs at a time.
+            const __m128 vx4 = _mm_set1_ps(vi.x()), vy4 = _mm_set1_ps(vi.y()), vz4 = _mm_set1_ps(vi.z());
+            const __m128 rhoi4 = _mm_set1_ps(rhoi), pm4 = _mm_set1_ps(pi), m4 = _mm_set1_ps(m);
+            const __m128 visc4 = _mm_set1_ps(viscosityScale), eps4 = _mm_set1_ps(eps2);
+            __m128 ax = _mm_setzero_ps(), ay = _mm_setzero_ps(), az = _mm_setzero_ps();
+            __m128 tx = _mm_setzero_ps(), ty = _mm_setzero_ps(), tz = _mm_setzero_ps(), gKsum = _mm_setzero_ps();
+            const __m128 gammaK4 = _mm_set1_ps(gamma * 2 * rho0), rMin4 = _mm_set1_ps(Real(1e-9) * Real(h_));
+            const __m128 cohesionScale4 = _mm_set1_ps(kCohesionWeight * V);
+            for (; k + 4 <= end; k += 4) {
+                const uint32_t* j = &fluidNbr_.index[k];
+                const PairOffsets4 d(xi, px_.data(), py_.data(), pz_.data(), j);
+                const __m128 &dx = d.dx, &dy = d.dy, &dz = d.dz, &r2 = d.r2;
+                const __m128 r = _mm_sqrt_ps(r2);
+                const __m128 sc = kernel4.gradFactor(r);
+                // rho_i + rho_j, used by viscosity and tension alike.
+                const __m128 rhoSum = _mm_add_ps(rhoi4, gather4(rho_.data(), j));
+                __m128 c = _mm_setzero_ps();
+                if (pressure) {
+                    c = _mm_sub_ps(c, _mm_mul_ps(m4, _mm_add_ps(pm4, gather4(pOverRho2, j))));
+                }
+                if (nu > 0) {
+                    const __m128 dvx = _mm_sub_ps(vx4, gather4(v_.data(), j, 0));
+                    const __m128 dvy = _mm_sub_ps(vy4, gather4(v_.data(), j, 1));
+                    const __m128 dvz = _mm_sub_ps(vz4, gather4(v_.data(), j, 2));
+                    const __m128 dvdx =
+                        _mm_add_ps(_mm_add_ps(_mm_mul_ps(dvx, dx), _mm_mul_ps(dvy, dy)), _mm_mul_ps(dvz, dz));
+                    const __m128 den = _mm_mul_ps(rhoSum, _mm_add_ps(r2, eps4));
+                    c = _mm_add_ps(c, _mm_div_ps(_mm_mul_ps(visc4, dvdx), den));
+                }
+                __m128 cs = _mm_mul_ps(c, sc);
+                if (tension) {
+                    // Surface tension (see the scalar loop below): gamma K_ij (-(n_i - n_j)
+                    // - w C(r) / r x_ij); the cohesion part joins the pair scalar.
+                    const __m128 gK = _mm_div_ps(gammaK4, rhoSum);
+                    const __m128 coh = _mm_and_ps(_mm_cmpgt_ps(r, rMin4),
+                                                  _mm_div_ps(_mm_mul_ps(cohesionScale4, cohesion4.C(r)), r));
+                    cs = _mm_sub_ps(cs, _mm_mul_ps(gK, coh));
+                    tx = _mm_add_ps(tx, _mm_mul_ps(gK, gather4(normal_.data(), j, 0)));
+                    ty = _mm_add_ps(ty, _mm_mul_ps(gK, gather4(normal_.data(), j, 1)));
+                    tz = _mm_add_ps(tz, _mm_mul_ps(gK, gather4(normal_.data(), j, 2)));
+                    gKsum = _mm_add_ps(gKsum, gK);
+                }
+                ax = _mm_add_ps(ax, _mm_mul_ps(cs, dx));
+                ay = _mm_add_ps(ay, _mm_mul_ps(cs, dy));
+                az = _mm_add_ps(az, _mm_mul_ps(cs, dz));
+            }
+            // sum gK (n_j - n_i) = sum gK n_j - n_i sum gK
+            if (tension)
+                acc += Vec3(horizontalSum(tx), horizontalSum(ty), horizontalSum(tz)) - horizontalSum(gKsum) * normal_[i];
+            acc += Vec3(horizontalSum(ax), horizontalSum(ay), horizontalSum(az));
+        }
+#endif
+        for (; k < end; ++k) {
+            const uint32_t j = fluidNbr_.index[k];
+            const Vec3 xij = xi - x_[j];
+            const Real r2 = xij.squaredNorm();
+            Real c = 0;
+            if (pressure) c -= m * (pi + pOverRho2[j]);
+            if (nu > 0) c += viscosityScale * (vi - v_[j]).dot(xij) / ((rhoi + rho_[j]) * (r2 + eps2));
+            acc += (c * kernel_.gradWFactor(std::sqrt(r2))) * xij;
+            if (tension) {
+                // Cohesion pulls neighbours to about one spacing, curvature flattens the
+                // surface; K_ij boosts the force where a particle lacks neighbours.
+                const Real r = std::sqrt(r2);
+                const Real Kij = 2 * rho0 / (rhoi + rho_[j]);
+                Vec3 f = -(normal_[i] - normal_[j]);
+                if (r > Real(1e-9) * Real(h_)) f -= (kCohesionWeight * V * cohesion_.C(r) / r) * xij;
+                acc += gamma * Kij * f;
+            }
+        }
+        if (nuWall > 0 || (pressure && pi != 0)) {
+            for (uint32_t k = boundaryNbr_.begin(i); k < boundaryNbr_.end(i); ++k) {
+                const uint32_t b = boundaryNbr_.index[k];
+                const Vec3 xib = xi - bx_[b];
+                const Real r2 = xib.squaredNorm();
+                const Vec3 grad = kernel_.gradW(xib, std::sqrt(r2));
+                // Walls push with the fluid particle's own pressure (Akinci 2012).
+                if (pressure) acc -= (kWallMirror * rho0 * bVolume_[b] * pi) * grad;
+                if (nuWall > 0) acc += (10 * nuWall * bVolume_[b] * rho0 / rho_[i] * vi.dot(xib) / (r2 + eps2)) * grad;
+            }
+        }
+        a_[i] = acc;
+    });
+    if (magnetics_) magnetics_->addKelvinAcceleration(a_);
+}
+
+void FluidSimulation::pressureAccelerations(const std::vector<Real>& kappa) {
+    // a_i = -sum_j V (kappa_i + kappa_j) grad W_ij - sum_b V_b kWallMirror kappa_i grad W_ib, where
+    // kappa = p / rho^2 in units normalized by rho0 (Bender & Koschier 2017).
+    const Real V = Real(volume_);
+    forEachParticle(x_.size(), [&](size_t i) {
+        const Real ki = kappa[i];
+        Vec3 acc = Vec3::Zero();
+        for (uint32_t k = fluidNbr_.begin(i); k < fluidNbr_.end(i); ++k)
+            acc -= (V * (ki + kappa[fluidNbr_.index[k]])) * fluidNbr_.gradW[k];
+        if (ki != 0)
+            for (uint32_t k = boundaryNbr_.begin(i); k < boundaryNbr_.end(i); ++k)
+                acc -= (kWallMirror * bVolume_[boundaryNbr_.index[k]] * ki) * boundaryNbr_.gradW[k];
+        a_[i] = acc;
+    });
+}
+
+Real FluidSimulation::divergence(size_t i, const std::vector<Vec3>& u) const {
+    // sum_j V (u_i - u_j) . grad W_ij + sum_b V_b u_i . grad W_ib (walls are at rest).
+    const Vec3 ui = u[i];
+    Real sum = 0;
+    for (uint32_t k = fluidNbr_.begin(i); k < fluidNbr_.end(i); ++k)
+        sum += (ui - u[fluidNbr_.index[k]]).dot(fluidNbr_.gradW[k]);
+    sum *= Real(volume_);
+    for (uint32_t k = boundaryNbr_.begin(i); k < boundaryNbr_.end(i); ++k)
+        sum += bVolume_[boundaryNbr_.index[k]] * ui.dot(boundaryNbr_.gradW[k]);
+    return sum;
+}
+
+void FluidSimulation::integratePositions(double dt) {
+    const size_t n = x_.size();
+    xOld_ = x_;
+    std::atomic<size_t> bad{size_t(-1)};
+    const Real rdt = Real(dt);
+    forEachParticle(n, [&](size_t i) {
+        x_[i] += rdt * v_[i];
+        // Checked before the container sees it: constrain() would park a NaN particle at
+        // its old position and hide the blow-up.
+        if (!x_[i].allFinite() || !v_[i].allFinite()) {
+            size_t expected = size_t(-1);
+            bad.compare_exchange_strong(expected, i);
+        }
+        container_->constrain(xOld_[i], x_[i], v_[i]);
+        // The split copy the vectorized neighbour loops gather from.
+        px_[i] = x_[i].x();
+        py_[i] = x_[i].y();
+        pz_[i] = x_[i].z();
+    });
+    if (bad != size_t(-1)) {
+        std::ostringstream msg;
+        msg << "non-finite position or velocity of particle " << id_[bad] << " at t = " << time_ + dt
+            << " s (step " << steps_ + 1 << ", dt " << dt << " s): the simulation blew up";
+        throw SimulationError(msg.str());
+    }
+}
+
+double FluidSimulation::step(double dtLimit) {
+    if (magnetics_) {
+        // The field at the step's start; the induced part is re-solved at every frame
+        // start (so a resumed run continues exactly) and whenever it has gone stale.
+        magnetics_->update(time_, x_, fluidNbr_, frameStart_);
+        frameStart_ = false;
+    }
+    const double dt = chooseTimeStep(dtLimit);
+    solver_->advanceVelocities(dt);
+    integratePositions(dt);
+    time_ += dt;
+    ++steps_;
+    stats_.dt = dt;
+    refreshNeighbors(false);
+    return dt;
+}
+
+void FluidSimulation::advanceTo(double tEnd) {
+    // The solver's warm start restarts at every frame, so that a run resumed from a frame
+    // file (positions, velocities, pressures) continues exactly like an uninterrupted one.
+    // DFSPH's divergence solve converges in a few iterations from zero.
+    solver_->resetWarmStart();
+    // A frame starts from a fresh search too: the particle order and the neighbour slots
+    // are then a function of the frame's state alone, as in a run resumed from its file.
+    if (searchStep_ != steps_) refreshNeighbors(true);
+    frameStart_ = true;
+    while (time_ < tEnd) {
+        step(tEnd - time_);
+        if (tEnd - time_ < 1e-12 * std::max(1.0, tEnd)) time_ = tEnd;
+    }
+}
+
+namespace {
+template <class T>
+std::vector<T> byId(const std::vector<T>& data, const std::vector<uint32_t>& id) {
+    std::vector<T> out(data.size());
+    for (size_t i = 0; i < data.size(); ++i) out[id[i]] = data[i];
+    return out;
+}
+} // namespace
+
+std::vector<Vec3> FluidSimulation::positionsById() const { return byId(x_, id_); }
+std::vector<Vec3> FluidSimulation::velocitiesById() const { return byId(v_, id_); }
+std::vector<Real> FluidSimulation::densitiesById() const { return byId(rho_, id_); }
+std::vector<Real> FluidSimulation::pressuresById() const { return byId(p_, id_); }
+std::vector<Vec3> FluidSimulation::fieldById() const {
+    if (!magnetics_ || magnetics_->field().size() != x_.size()) return std::vector<Vec3>(x_.size(), Vec3::Zero());
+    return byId(magnetics_->field(), id_);
+}
+std::vector<Vec3> FluidSimulation::magnetizationById() const {
+    if (!magnetics_ || magnetics_->magnetization().size() != x_.size())
+        return std::vector<Vec3>(x_.size(), Vec3::Zero());
+    return byId(magnetics_->magnetization(), id_);
+}
+std::vector<Magnet> FluidSimulation::magnetsNow() const {
+    return magnetics_ ? magnetics_->softenedMagnetsAt(time_) : std::vector<Magnet>{};
+}
+
+void FluidSimulation::setState(double time, const std::vector<Vec3>& xById, const std::vector<Vec3>& vById,
+                               const std::vector<Real>& pById, const std::vector<Vec3>& HById,
+                               const std::vector<Vec3>& MById) {
+    if (xById.size() != x_.size() || vById.size() != x_.size() || (!pById.empty() && pById.size() != x_.size()))
+        throw SimulationError("state has " + std::to_string(xById.size()) + " particles, the scene makes " +
+                              std::to_string(x_.size()));
+    for (size_t i = 0; i < x_.size(); ++i) id_[i] = uint32_t(i);
+    x_ = xById;
+    v_ = vById;
+    if (pById.empty()) std::fill(p_.begin(), p_.end(), Real(0));
+    else p_ = pById;
+    time_ = time;
+    solver_->resetWarmStart();
+    if (magnetics_ && HById.size() == x_.size() && MById.size() == x_.size())
+        magnetics_->setState(HById, MById);   // id order = current order until the sort below
+    refreshNeighbors(true);
+}
+
+} // namespace ferro
