@@ -208,10 +208,10 @@ std::string magnetInclude(const std::vector<Magnet>& magnets, const RenderParams
         return m.strength < 0 ? Vec3d(-d) : d;
     };
     auto length = [&](const Magnet& m) {
-        return m.kind == Magnet::Kind::Bar && m.length > 0 ? m.length : render.magnetLength;
+        return magnetKindInfo(m.kind).usesLength && m.length > 0 ? m.length : render.magnetLength;
     };
     auto radius = [&](const Magnet& m) {
-        return m.kind == Magnet::Kind::Loop && m.radius > 0 ? m.radius : render.magnetRadius;
+        return magnetKindInfo(m.kind).usesRadius && m.radius > 0 ? m.radius : render.magnetRadius;
     };
     array("FerroMagnetKind", [](const Magnet& m) { return quoted(magnetKindName(m.kind)); });
     array("FerroMagnetPosition", [](const Magnet& m) { return vec(toPovPoint(m.position)); });
@@ -233,10 +233,11 @@ std::string magnetInclude(const std::vector<Magnet>& magnets, const RenderParams
         const Vec3d d = toPovDirection(axis(m));
         const double half = 0.5 * length(m) * kPovUnitsPerMetre;
         const double r = radius(m) * kPovUnitsPerMetre;
-        if (m.kind == Magnet::Kind::Dipole || m.kind == Magnet::Kind::Bar) {
+        const MagnetBody body = magnetKindInfo(m.kind).body;
+        if (body == MagnetBody::Rod) {
             north.push_back("cylinder { " + vec(c) + ", " + vec(c + half * d) + ", " + number(r) + " }");
             south.push_back("cylinder { " + vec(c - half * d) + ", " + vec(c) + ", " + number(r) + " }");
-        } else if (m.kind == Magnet::Kind::Loop) {
+        } else if (body == MagnetBody::Ring) {
             // A torus lies in the xz plane around y: map y onto the axis with an orthonormal
             // frame (any frame will do, the torus is round) and move it to the centre. POV-Ray's
             // matrix takes the images of x, y, z as rows, then the translation.
@@ -309,12 +310,12 @@ ShotDescription describeShot(const SceneDocument& doc, int first, int last)
     double floor = bottom;
     const int frames = scene.shot.frameCount();
     for (const MagnetTrack& track : scene.magnets) {
-        if (track.base.kind == Magnet::Kind::Uniform)
+        if (magnetKindInfo(track.base.kind).body == MagnetBody::None)
             continue;
         for (int f = 0; f <= frames; ++f) {
             const Magnet m = track.at(f / scene.shot.fps);
-            const double len = m.kind == Magnet::Kind::Bar ? m.length : shot.render.magnetLength;
-            const double rad = m.kind == Magnet::Kind::Loop ? m.radius : shot.render.magnetRadius;
+            const double len = magnetKindInfo(m.kind).usesLength ? m.length : shot.render.magnetLength;
+            const double rad = magnetKindInfo(m.kind).usesRadius ? m.radius : shot.render.magnetRadius;
             const Vec3d d = m.direction.norm() > 0 ? Vec3d(m.direction.normalized()) : Vec3d(0, 0, 1);
             const double extent = 0.5 * len * std::fabs(d.z()) + rad * std::sqrt(std::max(0.0, 1 - d.z() * d.z()));
             floor = std::min(floor, m.position.z() - extent - 0.002);

@@ -273,7 +273,7 @@ SpikeResult addSpikes(const SpikeInput& in, const SpikeParams& P)
         if (magnet.strength == 0 || !(dirNorm > 0)) continue;
         const Vec3d axisDir = magnet.direction / dirNorm;
         Vec3d anchor = magnet.position;
-        if (magnet.kind == Magnet::Kind::Uniform) {
+        if (!magnetKindInfo(magnet.kind).positioned) {
             if (P.hasOrigin) {
                 anchor = P.origin;
             } else if (in.fluid.hasCenter) {

@@ -1,6 +1,6 @@
 #include "sim/magnetics/DipoleTree.hpp"
 
-#include "sim/sph/Kernel.hpp" // kPi
+#include "sim/core/Constants.hpp"
 
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>

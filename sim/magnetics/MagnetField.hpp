@@ -9,22 +9,16 @@
 // Conventions: H is the field of the magnet alone in vacuum, in SI units (A/m); the
 // flux density is B = mu0 H. No mu0 appears anywhere in this file.
 #include "sim/core/Types.hpp"
+#include "sim/magnetics/MagnetKinds.hpp"
 #include "sim/core/Constants.hpp"
 
 #include <vector>
 
 namespace ferro {
 
-using Mat3d = Eigen::Matrix3d;
-
 /// One field source. A plain struct: which members matter depends on `kind`.
 struct Magnet {
-    enum class Kind {
-        Dipole,  ///< point dipole at `position`, moment `strength` * direction
-        Bar,     ///< two magnetic charges +-q_m, `length` apart along direction (Gilbert model)
-        Uniform, ///< homogeneous field `strength` * direction everywhere (Helmholtz coils)
-        Loop     ///< circular current loop of `radius`, axis = direction, centred at `position`
-    };
+    using Kind = MagnetKind;  ///< see sim/magnetics/MagnetKinds.hpp: one row per kind
     Kind kind = Kind::Dipole;
     Vec3d position{0, 0, 0};  ///< centre of the magnet [m] (ignored by Uniform)
     Vec3d direction{0, 0, 1}; ///< magnetic axis (south -> north for Dipole and Bar; right-hand

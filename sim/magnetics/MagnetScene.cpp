@@ -6,36 +6,23 @@ namespace ferro {
 
 namespace {
 
-// The strength key is named for what it is for each kind, in the magnet and in its keys.
-const char* strengthKey(Magnet::Kind kind)
-{
-    switch (kind) {
-    case Magnet::Kind::Dipole: return "moment";        // [A m^2]
-    case Magnet::Kind::Bar: return "pole_strength";    // [A m]
-    case Magnet::Kind::Uniform: return "field";        // [A/m]
-    case Magnet::Kind::Loop: return "current";         // [A]
-    }
-    return "strength";
-}
-
 MagnetTrack parseMagnet(const TableReader& r)
 {
     MagnetTrack track;
     Magnet& m = track.base;
-    const std::string kind = r.choice("kind", {"dipole", "bar", "uniform", "loop"}, "dipole");
-    m.kind = kind == "bar" ? Magnet::Kind::Bar
-           : kind == "uniform" ? Magnet::Kind::Uniform
-           : kind == "loop" ? Magnet::Kind::Loop : Magnet::Kind::Dipole;
-    const std::string sKey = strengthKey(m.kind);
-    if (m.kind != Magnet::Kind::Uniform)
+    // The kind's row in the table says which keys it reads.
+    const MagnetKindInfo& info = *findMagnetKind(r.choice("kind", magnetKindNames(), "dipole"));
+    m.kind = info.kind;
+    const std::string sKey = info.strengthKey;
+    if (info.positioned)
         m.position = r.vec3("position", m.position);
     m.direction = r.unitVector("direction", m.direction);
     m.strength = r.number(sKey, 0.0);
-    if (m.kind == Magnet::Kind::Bar)
+    if (info.usesLength)
         m.length = r.positive("length");
-    if (m.kind == Magnet::Kind::Loop)
+    if (info.usesRadius)
         m.radius = r.positive("radius");
-    if (m.kind != Magnet::Kind::Uniform)
+    if (info.positioned)
         m.softening = r.nonNegative("softening", m.softening);
     double lastTime = -std::numeric_limits<double>::infinity();
     for (const TableReader& k : r.tables("keys")) {
@@ -47,7 +34,7 @@ MagnetTrack parseMagnet(const TableReader& r)
             k.fail("time", "keys must be in time order (got " + formatNumber(key.time) + " after " +
                                formatNumber(lastTime) + ")");
         lastTime = key.time;
-        key.position = m.kind != Magnet::Kind::Uniform ? k.vec3("position", m.position) : m.position;
+        key.position = info.positioned ? k.vec3("position", m.position) : m.position;
         key.direction = k.unitVector("direction", m.direction);
         key.strength = k.number(sKey, m.strength);
         k.finish();

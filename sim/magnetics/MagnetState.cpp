@@ -7,13 +7,7 @@ namespace ferro {
 
 const char* magnetKindName(Magnet::Kind kind)
 {
-    switch (kind) {
-    case Magnet::Kind::Dipole: return "dipole";
-    case Magnet::Kind::Bar: return "bar";
-    case Magnet::Kind::Uniform: return "uniform";
-    case Magnet::Kind::Loop: return "loop";
-    }
-    return "dipole";
+    return magnetKindInfo(kind).name;
 }
 
 void writeMagnetComments(ParticleTable& table, const std::vector<Magnet>& magnets, const MagnetizationParams* law)
@@ -54,11 +48,9 @@ std::vector<Magnet> readMagnetComments(const ParticleTable& table)
             m.direction.z() >> m.strength >> m.length >> m.radius >> m.softening;
         if (!in)
             throw ParticleFileError("malformed 'comment magnet " + value + "' (expected kind and 10 numbers)");
-        if (kind == "dipole") m.kind = Magnet::Kind::Dipole;
-        else if (kind == "bar") m.kind = Magnet::Kind::Bar;
-        else if (kind == "uniform") m.kind = Magnet::Kind::Uniform;
-        else if (kind == "loop") m.kind = Magnet::Kind::Loop;
-        else throw ParticleFileError("unknown magnet kind '" + kind + "' in header");
+        const MagnetKindInfo* info = findMagnetKind(kind);
+        if (!info) throw ParticleFileError("unknown magnet kind '" + kind + "' in header");
+        m.kind = info->kind;
         magnets.push_back(m);
     }
     if (expected >= 0 && expected != long(magnets.size()))

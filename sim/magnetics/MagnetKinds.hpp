@@ -1,0 +1,81 @@
+#pragma once
+// The magnet kinds, one table: everything a scene file, a particle file, the field
+// evaluation and a render need to know of a kind is its row in kMagnetKinds.
+//
+// Adding a kind touches two files:
+//   1. this header: its MagnetKind value, the declarations of its field and gradient, and
+//      its row in kMagnetKinds (name, strength key, which keys it reads, what is drawn);
+//   2. sim/magnetics/<Name>Magnet.cpp: the field H [A/m] and its Jacobian [A/m^2].
+// The scene parser (MagnetScene.cpp), the particle-file header (MagnetState.cpp), the
+// field sum (MagnetField.cpp) and ferro-pov's magnet bodies all read the table.
+#include "sim/core/Types.hpp"
+
+#include <string>
+#include <vector>
+
+namespace ferro {
+
+struct Magnet;
+using Mat3d = Eigen::Matrix3d;
+
+enum class MagnetKind {
+    Dipole,  ///< point dipole at `position`, moment `strength` * direction
+    Bar,     ///< two magnetic charges +-q_m, `length` apart along direction (Gilbert model)
+    Uniform, ///< homogeneous field `strength` * direction everywhere (Helmholtz coils)
+    Loop     ///< circular current loop of `radius`, axis = direction, centred at `position`
+};
+
+/// The body ferro-pov draws for a magnet.
+enum class MagnetBody {
+    None, ///< nothing (a uniform field has no body)
+    Rod,  ///< a cylinder along the axis, split into north and south halves
+    Ring  ///< a torus around the axis (a current loop's wire)
+};
+
+/// Field and Jacobian of one magnet at x [m]; `axis` is its unit direction.
+using MagnetFieldFn = Vec3d (*)(const Magnet& magnet, const Vec3d& axis, const Vec3d& x);
+using MagnetGradientFn = Mat3d (*)(const Magnet& magnet, const Vec3d& axis, const Vec3d& x);
+
+struct MagnetKindInfo {
+    MagnetKind kind;
+    const char* name;         ///< scene `kind` and particle-file header word
+    const char* strengthKey;  ///< scene key of Magnet::strength
+    const char* strengthUnit; ///< its SI unit, for documentation and messages
+    bool positioned;          ///< reads `position` and `softening` (false: same everywhere)
+    bool usesLength;          ///< `length` required: the distance between the poles
+    bool usesRadius;          ///< `radius` required: the loop's radius
+    MagnetBody body;
+    MagnetFieldFn field;
+    MagnetGradientFn gradient;
+};
+
+Vec3d dipoleMagnetField(const Magnet&, const Vec3d&, const Vec3d&);    // DipoleMagnet.cpp
+Mat3d dipoleMagnetGradient(const Magnet&, const Vec3d&, const Vec3d&);
+Vec3d barMagnetField(const Magnet&, const Vec3d&, const Vec3d&);       // BarMagnet.cpp
+Mat3d barMagnetGradient(const Magnet&, const Vec3d&, const Vec3d&);
+Vec3d uniformMagnetField(const Magnet&, const Vec3d&, const Vec3d&);   // UniformMagnet.cpp
+Mat3d uniformMagnetGradient(const Magnet&, const Vec3d&, const Vec3d&);
+Vec3d loopMagnetField(const Magnet&, const Vec3d&, const Vec3d&);      // LoopMagnet.cpp
+Mat3d loopMagnetGradient(const Magnet&, const Vec3d&, const Vec3d&);
+
+/// One row per kind, in MagnetKind order.
+inline const MagnetKindInfo kMagnetKinds[] = {
+    // kind                 name       strength key     unit      pos.   length radius body
+    {MagnetKind::Dipole, "dipole", "moment", "A m^2", true, false, false, MagnetBody::Rod, &dipoleMagnetField,
+     &dipoleMagnetGradient},
+    {MagnetKind::Bar, "bar", "pole_strength", "A m", true, true, false, MagnetBody::Rod, &barMagnetField,
+     &barMagnetGradient},
+    {MagnetKind::Uniform, "uniform", "field", "A/m", false, false, false, MagnetBody::None, &uniformMagnetField,
+     &uniformMagnetGradient},
+    {MagnetKind::Loop, "loop", "current", "A", true, false, true, MagnetBody::Ring, &loopMagnetField,
+     &loopMagnetGradient},
+};
+
+/// The row of `kind`.
+const MagnetKindInfo& magnetKindInfo(MagnetKind kind);
+/// The row called `name`, or nullptr.
+const MagnetKindInfo* findMagnetKind(const std::string& name);
+/// Every kind's name, in table order.
+std::vector<std::string> magnetKindNames();
+
+} // namespace ferro

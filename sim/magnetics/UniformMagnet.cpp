@@ -1,0 +1,17 @@
+// Uniform field (kind "uniform"): H = strength * axis [A/m] everywhere, the field between
+// Helmholtz coils; no position, no gradient.
+#include "sim/magnetics/MagnetKinds.hpp"
+
+#include "sim/magnetics/MagnetField.hpp"
+
+namespace ferro {
+
+Vec3d uniformMagnetField(const Magnet& mag, const Vec3d& n, const Vec3d&) {
+    return mag.strength * n;
+}
+
+Mat3d uniformMagnetGradient(const Magnet&, const Vec3d&, const Vec3d&) {
+    return Mat3d::Zero();
+}
+
+} // namespace ferro
