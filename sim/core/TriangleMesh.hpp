@@ -1,8 +1,8 @@
 #pragma once
 // Triangle meshes as the stages after ferro-surface pass them along, and their files.
 //
-// surface/ owns meshes and mesh files (DESIGN.md): ferro-surface writes them, ferro-spikes
-// reads and displaces them, ferro-pov exports them. This header includes no OpenVDB, CGAL or
+// A foundation of every later stage, so it lives in sim/core: ferro-surface writes meshes,
+// ferro-spikes reads and displaces them, ferro-pov exports them. This header includes no OpenVDB, CGAL or
 // assimp header, so any stage may include it cheaply.
 //
 // Files: binary little-endian PLY is written directly (fast, and it carries `comment key
