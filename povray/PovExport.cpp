@@ -492,20 +492,16 @@ void PovExporter::exportFrame(const TriangleMesh& mesh, int frame) const
 
 void PovExporter::exportFrameFile(const std::string& meshPath, int frame) const
 {
-    requireMeshInput(meshPath);
+    refuseToOverwriteInputs("--out", meshIncludePath(frame), {meshPath});
+    refuseToOverwriteInputs("--out", magnetIncludePath(frame), {meshPath});
+    requireReadable(meshPath);
     const TriangleMesh mesh = readMesh(meshPath); // its errors name the file already
     try {
         exportFrame(mesh, frame);
     } catch (const MeshFileError& e) {
-        throw MeshFileError(meshPath + ": " + e.what());
+        throw MeshFileError(meshPath + ": " + e.what(), e.code());
     }
 }
 
-void requireMeshInput(const std::string& path)
-{
-    std::ifstream probe(path, std::ios::binary);
-    if (!probe)
-        throw PovInputMissing(path + ": cannot open: " + std::strerror(errno));
-}
 
 } // namespace ferro

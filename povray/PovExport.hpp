@@ -30,6 +30,7 @@
 #include "povray/RenderParams.hpp"
 #include "sim/magnetics/MagnetField.hpp"
 #include "sim/scene/SimParams.hpp"
+#include "sim/core/StageErrors.hpp"
 #include "sim/core/TriangleMesh.hpp"
 
 #include <stdexcept>
@@ -41,20 +42,14 @@ namespace ferro {
 class SceneDocument;
 
 /// A file that could not be written (exit code 4 in ferro-pov).
-class PovExportError : public std::runtime_error {
+class PovExportError : public StageError {
 public:
-    using std::runtime_error::runtime_error;
+    explicit PovExportError(const std::string& what) : StageError(kExitIoError, what) {}
 };
 
-/// An input file (mesh) that is missing or cannot be opened (exit code 4 in ferro-pov); a file
-/// that opens but is not a usable mesh is a MeshFileError (exit code 2).
-class PovInputMissing : public std::runtime_error {
-public:
-    using std::runtime_error::runtime_error;
-};
-
-/// Throws PovInputMissing ("<path>: cannot open: <reason>") unless `path` opens for reading.
-void requireMeshInput(const std::string& path);
+/// An input mesh that is missing or cannot be opened (exit 4; requireReadable throws it); a
+/// file that opens but is not a usable mesh is a MeshFileError (exit 2).
+using PovInputMissing = InputMissingError;
 
 /// POV-Ray units per metre: exported scenes are in millimetres.
 constexpr double kPovUnitsPerMetre = 1000.0;

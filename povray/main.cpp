@@ -2,30 +2,16 @@
 // look template. Parses arguments and calls the ferro_pov library; nothing else lives here.
 #include "povray/PovExport.hpp"
 #include "sim/core/CommandLine.hpp"
+#include "sim/core/FrameRunner.hpp"
 #include "sim/core/ParticleFile.hpp"
 #include "sim/core/SceneDocument.hpp"
 #include "sim/core/ExitCodes.hpp"
 #include "sim/core/ErrorText.hpp"
 
 #include <CLI/CLI.hpp>
-#include <tbb/parallel_for.h>
 
 #include <iostream>
 
-namespace {
-
-// parseFrameRange's error as a CLI11 validation error of `option`.
-std::pair<int, int> parseRange(const std::string& text, const std::string& option)
-{
-    try {
-        const ferro::FrameRange r = ferro::parseFrameRange(text);
-        return {r.first, r.last};
-    } catch (const std::invalid_argument& e) {
-        throw CLI::ValidationError(option, e.what());
-    }
-}
-
-} // namespace
 
 int main(int argc, char** argv)
 {
@@ -55,18 +41,16 @@ int main(int argc, char** argv)
 
     const std::vector<ErrorExit> errors = {
         exitOn<SceneError>(kExitBadInput),
-        exitOn<MeshFileError>(kExitBadInput),
-        exitOn<PovInputMissing>(kExitIoError),
-        exitOn<PovExportError>(kExitIoError),
+        // Missing or malformed meshes and failed writes are StageErrors: they carry their code.
         exitOn<std::exception>(kExitFailure, "", oneLine),
     };
     return runCommandLine("ferro-pov", app, argc, argv, errors, [&] {
         // Checks CLI11 cannot express: reported like its own parse errors.
         std::pair<int, int> frames{-1, -1}, shotFrames{-1, -1};
         if (!framesText.empty())
-            frames = parseRange(framesText, "--frames");
+            { const FrameRange r = frameRangeArgument("--frames", framesText); frames = {r.first, r.last}; }
         if (!shotFramesText.empty())
-            shotFrames = parseRange(shotFramesText, "--shot-frames");
+            { const FrameRange r = frameRangeArgument("--shot-frames", shotFramesText); shotFrames = {r.first, r.last}; }
         if (!framesText.empty() && input.empty())
             throw CLI::ValidationError("--frames", "needs a mesh pattern");
         if (framesText.empty() && input.empty() && noShot)
@@ -76,17 +60,13 @@ int main(int argc, char** argv)
         const SceneDocument doc = SceneDocument::load(scenePath, overrides);
         const PovExporter exporter(doc, outDir, shotFrames.first, shotFrames.second);
         if (!input.empty() && frames.first >= 0) {
-            // Read every file first, so a missing frame fails the run before anything is written.
-            for (int f = frames.first; f <= frames.second; ++f)
-                requireMeshInput(framePath(input, f));
-            tbb::parallel_for(int64_t(frames.first), int64_t(frames.second) + 1, [&](int64_t f64) {
-                const int f = int(f64);
+            runFrames({frames.first, frames.second}, {{"mesh pattern", input}}, [&](int f) {
                 exporter.exportFrameFile(framePath(input, f), f);
                 if (!quiet)
                     std::cerr << "ferro-pov: frame " + std::to_string(f) + " -> " + exporter.meshIncludePath(f) + "\n";
             });
         } else if (!input.empty()) {
-            requireMeshInput(input);
+            requireReadable(input);
             const TriangleMesh mesh = readMesh(input);
             int f = frame;
             if (f < 0) {

@@ -1,5 +1,7 @@
 #include "spikes/SpikeFrames.hpp"
 
+#include "sim/core/FrameRunner.hpp"
+
 #include "sim/magnetics/MagnetState.hpp"
 #include "sim/magnetics/MagnetizationSolver.hpp"
 #include "sim/core/ParticleFile.hpp"
@@ -67,18 +69,12 @@ std::string formatDouble(double v)
 
 } // namespace
 
-void requireSpikeInput(const std::string& path)
-{
-    std::ifstream probe(path, std::ios::binary);
-    if (!probe) throw SpikeIoError(path + ": cannot open: " + std::strerror(errno));
-}
-
 SpikeInput loadSpikeInput(const SpikeScene& scene, const std::string& surfacePath, const std::string& particlePath,
                           int frameHint)
 {
     SpikeInput in;
-    requireSpikeInput(surfacePath);
-    if (!particlePath.empty()) requireSpikeInput(particlePath);
+    requireReadable(surfacePath);
+    if (!particlePath.empty()) requireReadable(particlePath);
     try {
         in.surface = readMesh(surfacePath);
     } catch (const MeshFileError& e) {
@@ -171,6 +167,7 @@ SpikeInput loadSpikeInput(const SpikeScene& scene, const std::string& surfacePat
 SpikeResult spikeFrame(const SpikeScene& scene, const std::string& surfacePath, const std::string& particlePath,
                        const std::string& outPath, int frameHint)
 {
+    refuseToOverwriteInputs("--out", outPath, {surfacePath, particlePath});
     const SpikeInput in = loadSpikeInput(scene, surfacePath, particlePath, frameHint);
     SpikeResult res = addSpikes(in, scene.params);
     TriangleMesh& out = res.mesh;
@@ -198,48 +195,26 @@ void spikeFrames(const SpikeScene& scene, const std::string& surfacePattern, con
     if (first < 0 || last < first || last > kMaxFrame)
         throw SpikeInputError("--frames " + std::to_string(first) + ":" + std::to_string(last) +
                               ": need 0 <= FIRST <= LAST <= " + std::to_string(kMaxFrame));
-    if (first != last && framePath(outPattern, first) == framePath(outPattern, first + 1))
-        throw SpikeInputError("--out: a frame range needs a {:04} or %04d placeholder in the output pattern");
-    if (first != last && framePath(surfacePattern, first) == framePath(surfacePattern, first + 1))
-        throw SpikeInputError("a frame range needs a {:04} or %04d placeholder in the surface pattern");
-    if (first != last && !particlePattern.empty() &&
-        framePath(particlePattern, first) == framePath(particlePattern, first + 1))
-        throw SpikeInputError("--particles: a frame range needs a {:04} or %04d placeholder in the particle pattern");
+    const std::vector<FramePattern> patterns = {
+        {"--out", outPattern}, {"surface pattern", surfacePattern}, {"--particles", particlePattern}};
     std::mutex mutex;
-    std::exception_ptr failure;
-    int failedFrame = 0;
-    std::atomic<bool> stop{false};
-    tbb::parallel_for(int64_t(first), int64_t(last) + 1, int64_t(1), [&](int64_t frame64) {
-        const int frame = int(frame64);
-        if (stop) return;
-        try {
-            const auto start = std::chrono::steady_clock::now();
-            const SpikeResult res =
-                spikeFrame(scene, framePath(surfacePattern, frame),
-                           particlePattern.empty() ? std::string() : framePath(particlePattern, frame),
-                           framePath(outPattern, frame), frame);
-            const double seconds =
-                std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
-            if (!quiet) {
-                std::ostringstream line;
-                line << "ferro-spikes: frame " << frame << ": " << res.tips.size() << " tips";
-                if (!res.patterns.empty()) line << ", spacing " << res.patterns.front().spacing * 1e3 << " mm";
-                line << ", " << res.mesh.triangles.size() << " triangles, volume "
-                     << (res.volumeIn > 0 ? 100.0 * (res.volumeOut - res.volumeIn) / res.volumeIn : 0.0) << " %, "
-                     << seconds << " s\n";
-                std::lock_guard<std::mutex> lock(mutex);
-                std::cerr << line.str();
-            }
-        } catch (...) {
+    runFrames({first, last}, patterns, [&](int frame) {
+        const auto start = std::chrono::steady_clock::now();
+        const SpikeResult res = spikeFrame(scene, framePath(surfacePattern, frame),
+                                           particlePattern.empty() ? std::string() : framePath(particlePattern, frame),
+                                           framePath(outPattern, frame), frame);
+        const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+        if (!quiet) {
+            std::ostringstream line;
+            line << "ferro-spikes: frame " << frame << ": " << res.tips.size() << " tips";
+            if (!res.patterns.empty()) line << ", spacing " << res.patterns.front().spacing * 1e3 << " mm";
+            line << ", " << res.mesh.triangles.size() << " triangles, volume "
+                 << (res.volumeIn > 0 ? 100.0 * (res.volumeOut - res.volumeIn) / res.volumeIn : 0.0) << " %, "
+                 << seconds << " s\n";
             std::lock_guard<std::mutex> lock(mutex);
-            if (!failure || frame < failedFrame) {
-                failure = std::current_exception();
-                failedFrame = frame;
-            }
-            stop = true;
+            std::cerr << line.str();
         }
     });
-    if (failure) std::rethrow_exception(failure);
 }
 
 } // namespace ferro

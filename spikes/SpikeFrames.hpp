@@ -1,6 +1,7 @@
 #pragma once
 // Files in, files out: one frame (surface mesh + particle file + scene -> spiky mesh) and
 // frame ranges with several frames in flight. This is what ferro-spikes' main calls.
+#include "sim/core/StageErrors.hpp"
 #include "spikes/SpikeMapper.hpp"
 
 #include <stdexcept>
@@ -11,22 +12,10 @@ namespace ferro {
 
 class SceneDocument;
 
-/// Input that cannot be used (unreadable or malformed mesh or particle file, inconsistent
-/// options). what() is one line; ferro-spikes exits with code 2.
-class SpikeInputError : public std::runtime_error {
-public:
-    using std::runtime_error::runtime_error;
-};
-
-/// An input file (surface mesh or particle file) that is missing or cannot be opened;
-/// ferro-spikes exits with code 4. A file that opens but is unusable is a SpikeInputError.
-class SpikeIoError : public std::runtime_error {
-public:
-    using std::runtime_error::runtime_error;
-};
-
-/// Throws SpikeIoError ("<path>: cannot open: <reason>") unless `path` opens for reading.
-void requireSpikeInput(const std::string& path);
+/// Input that cannot be used (malformed mesh or particle file, inconsistent options): exit 2.
+using SpikeInputError = BadInputError;
+/// An input file (surface mesh or particle file) that is missing or cannot be opened: exit 4.
+using SpikeIoError = InputMissingError;
 
 /// What a run takes from the scene file, parsed and validated once.
 struct SpikeScene {
@@ -57,7 +46,8 @@ SpikeResult spikeFrame(const SpikeScene& scene, const std::string& surfacePath, 
 
 /// A frame range: patterns with a {:04} / %04d placeholder, frames first..last inclusive,
 /// several in flight (TBB; the caller limits threads). Progress lines on stderr unless quiet.
-/// Stops at the first failing frame and rethrows its error (frames already written are kept).
+/// The policy of every stage's frame range (sim/core/FrameRunner.hpp): stops at the first
+/// failing frame and rethrows its error (frames already written are kept).
 void spikeFrames(const SpikeScene& scene, const std::string& surfacePattern, const std::string& particlePattern,
                  const std::string& outPattern, int first, int last, bool quiet);
 

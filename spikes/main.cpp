@@ -33,9 +33,7 @@ int main(int argc, char** argv) {
     app.add_flag("--quiet,-q", quiet, "no progress lines on stderr");
     const std::vector<ErrorExit> errors = {
         exitOn<SceneError>(kExitBadInput),
-        exitOn<SpikeInputError>(kExitBadInput),
-        exitOn<SpikeIoError>(kExitIoError),
-        exitOn<MeshFileError>(kExitIoError),
+        // Missing (4) or unusable (2) inputs and failed writes are StageErrors with their code.
         // Internal failures (CGAL, out of memory, ...): their messages may span lines.
         exitOn<std::exception>(kExitFailure, "", oneLine),
     };

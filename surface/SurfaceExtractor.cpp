@@ -302,11 +302,11 @@ void writeLevelSet(const std::string& path, const TriangleMesh& mesh, double vox
                 file.write(grids);
                 file.close();
             } catch (const std::exception& e) {
-                throw MeshFileError(path + ": cannot write the level set: " + e.what());
+                throw MeshFileError(path + ": cannot write the level set: " + e.what(), kExitIoError);
             }
         });
     } catch (const AtomicFileError&) {
-        throw MeshFileError(path + ": cannot rename the temporary file");
+        throw MeshFileError(path + ": cannot rename the temporary file", kExitIoError);
     }
 }
 

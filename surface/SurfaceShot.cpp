@@ -1,6 +1,8 @@
 // One particle file -> one mesh file, and frame ranges (see SurfaceShot.hpp).
 #include "surface/SurfaceShot.hpp"
 
+#include "sim/core/FrameRunner.hpp"
+
 #include "sim/core/ParticleFile.hpp"
 #include "sim/core/ExitCodes.hpp"
 
@@ -18,22 +20,13 @@
 
 namespace ferro {
 
-namespace {
-
-/// Empty if `path` opens for reading, else why not ("No such file or directory", ...).
-std::string openProblem(const std::string& path) {
-    std::ifstream probe(path, std::ios::binary);
-    return probe ? std::string() : std::string(std::strerror(errno));
-}
-
-} // namespace
-
 SurfaceStats meshParticleFile(const std::string& inPath, const std::string& outPath, const SurfaceParams& params,
                               const std::string& vdbPath) {
     // A missing or unopenable file is an I/O problem (wrong path, frame not simulated yet,
     // permissions); a file that opens but is unreadable as particles is bad input.
-    const std::string problem = openProblem(inPath);
-    if (!problem.empty()) throw SurfaceRunError(kExitIoError, inPath + ": cannot open: " + problem);
+    refuseToOverwriteInputs("--out", outPath, {inPath});
+    refuseToOverwriteInputs("--vdb", vdbPath, {inPath, outPath});
+    requireReadable(inPath);
     ParticleTable table;
     std::vector<Vec3> x;
     double spacing = 0;
@@ -55,19 +48,13 @@ SurfaceStats meshParticleFile(const std::string& inPath, const std::string& outP
         mesh = extractSurface(x, params, spacing, vdbPath, &stats);
     } catch (const SurfaceError& e) {
         throw SurfaceRunError(kExitBadInput, inPath + ": " + e.what());
-    } catch (const MeshFileError& e) {
-        throw SurfaceRunError(kExitIoError, e.what());
     }
     mesh.comments = table.comments;
     setComment(mesh, "surface_method", methodName(params.method));
     std::ostringstream sp;
     sp << std::setprecision(9) << stats.spacing;
     setComment(mesh, "spacing", sp.str());
-    try {
-        writeMesh(outPath, mesh, params.format);
-    } catch (const MeshFileError& e) {
-        throw SurfaceRunError(kExitIoError, e.what());
-    }
+    writeMesh(outPath, mesh, params.format); // MeshFileError: a StageError with its code
     return stats;
 }
 
@@ -75,48 +62,34 @@ int runSurface(const SurfaceRun& run, const SurfaceParams& params, std::ostream&
     std::mutex io;
     auto one = [&](const std::string& in, const std::string& out, const std::string& vdb, const std::string& label) {
         const tbb::tick_count t0 = tbb::tick_count::now();
-        try {
-            const SurfaceStats st = meshParticleFile(in, out, params, vdb);
-            if (!run.quiet) {
-                std::lock_guard<std::mutex> lock(io);
-                log << "ferro-surface: " << label << out << " (" << std::fixed << std::setprecision(2)
-                    << (tbb::tick_count::now() - t0).seconds() << " s, voxel " << std::setprecision(3)
-                    << st.voxelSize * 1e3 << " mm)\n";
-            }
-            return int(kExitOk);
-        } catch (const SurfaceRunError& e) {
+        const SurfaceStats st = meshParticleFile(in, out, params, vdb);
+        if (!run.quiet) {
             std::lock_guard<std::mutex> lock(io);
-            err << "ferro-surface: error: " << e.what() << "\n";
-            return e.code();
+            log << "ferro-surface: " << label << out << " (" << std::fixed << std::setprecision(2)
+                << (tbb::tick_count::now() - t0).seconds() << " s, voxel " << std::setprecision(3)
+                << st.voxelSize * 1e3 << " mm)\n";
         }
     };
-    if (!run.range) return one(run.input, run.output, run.vdb, "");
-
-    if (run.firstFrame < 0 || run.lastFrame < run.firstFrame || run.lastFrame > kMaxFrame) {
-        err << "ferro-surface: error: --frames " << run.firstFrame << ":" << run.lastFrame
-            << ": need 0 <= FIRST <= LAST <= " << kMaxFrame << "\n";
-        return kExitBadInput;
-    }
-    // Distinct outputs per frame, or every frame would overwrite the same file.
-    for (const std::string* pattern : {&run.input, &run.output, &run.vdb}) {
-        if (pattern->empty()) continue;
-        if (run.firstFrame != run.lastFrame && framePath(*pattern, run.firstFrame) == framePath(*pattern, run.lastFrame)) {
-            err << "ferro-surface: error: '" << *pattern << "' has no frame placeholder such as {:04} or %04d\n";
-            return kExitBadInput;
+    try {
+        if (!run.range) {
+            one(run.input, run.output, run.vdb, "");
+            return kExitOk;
         }
+        if (run.firstFrame < 0 || run.lastFrame < run.firstFrame || run.lastFrame > kMaxFrame)
+            throw BadInputError("--frames " + std::to_string(run.firstFrame) + ":" + std::to_string(run.lastFrame) +
+                                ": need 0 <= FIRST <= LAST <= " + std::to_string(kMaxFrame));
+        // Distinct outputs per frame, or every frame would overwrite the same file.
+        runFrames({run.firstFrame, run.lastFrame}, {{"input", run.input}, {"--out", run.output}, {"--vdb", run.vdb}},
+                  [&](int f) {
+                      one(framePath(run.input, f), framePath(run.output, f),
+                          run.vdb.empty() ? std::string() : framePath(run.vdb, f),
+                          "frame " + std::to_string(f) + " -> ");
+                  });
+        return kExitOk;
+    } catch (const StageError& e) {
+        err << "ferro-surface: error: " << e.what() << "\n";
+        return e.code();
     }
-    const int64_t count = int64_t(run.lastFrame) - int64_t(run.firstFrame) + 1;
-    std::vector<int> codes(size_t(count), kExitOk);
-    // Frames in flight at once; each also runs its own steps in parallel.
-    tbb::parallel_for(int64_t(0), count, [&](int64_t k) {
-        const int f = int(run.firstFrame + k);
-        codes[size_t(k)] = one(framePath(run.input, f), framePath(run.output, f),
-                               run.vdb.empty() ? std::string() : framePath(run.vdb, f),
-                               "frame " + std::to_string(f) + " -> ");
-    });
-    for (int c : codes)
-        if (c != kExitOk) return c;
-    return kExitOk;
 }
 
 } // namespace ferro

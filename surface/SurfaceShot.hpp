@@ -1,6 +1,7 @@
 #pragma once
 // ferro-surface's work on files: one particle file -> one mesh file, or a range of frames
 // with several in flight. main.cpp only parses arguments and calls this.
+#include "sim/core/StageErrors.hpp"
 #include "surface/SurfaceExtractor.hpp"
 #include "surface/SurfaceParams.hpp"
 
@@ -21,14 +22,7 @@ struct SurfaceRun {
 };
 
 /// A frame that failed, with the exit code it maps to (kExitBadInput, kExitIoError, ...).
-class SurfaceRunError : public std::runtime_error {
-public:
-    SurfaceRunError(int code, const std::string& what) : std::runtime_error(what), code_(code) {}
-    int code() const { return code_; }
-
-private:
-    int code_;
-};
+using SurfaceRunError = StageError;
 
 /// Meshes one particle file into `outPath` (format from params.format or the extension).
 /// The particle file's `comment` lines (frame, time, spacing, magnets, ...) are copied into
@@ -38,8 +32,9 @@ SurfaceStats meshParticleFile(const std::string& inPath, const std::string& outP
                               const SurfaceParams& params, const std::string& vdbPath = {});
 
 /// Runs a single file or a frame range (frames in parallel, TBB). Writes one line per frame
-/// to `log` unless quiet, and one "ferro-surface: error: ..." line per failed frame to `err`.
-/// Every frame is attempted; returns kExitOk, or the exit code of the first failed frame.
+/// to `log` unless quiet. A range follows every stage's policy (sim/core/FrameRunner.hpp):
+/// no new frame starts after one failed. Returns kExitOk, or writes "ferro-surface: error:
+/// <reason>" for the lowest failed frame to `err` and returns its exit code.
 int runSurface(const SurfaceRun& run, const SurfaceParams& params, std::ostream& log, std::ostream& err);
 
 } // namespace ferro

@@ -1,5 +1,7 @@
 #include "sim/core/CommandLine.hpp"
 
+#include "sim/core/StageErrors.hpp"
+
 #include <CLI/CLI.hpp>
 
 #include <iostream>
@@ -30,6 +32,8 @@ int runCommandLine(const char* program, CLI::App& app, int argc, char** argv, co
         return report(program, std::string(e.what()) + " (see --help)", kExitBadInput);
     } catch (const ArgumentError& e) {
         return report(program, e.what(), kExitBadInput);
+    } catch (const StageError& e) {
+        return report(program, e.what(), e.code());
     } catch (const std::exception& e) {
         for (const ErrorExit& error : errors) {
             if (!error.matches(e)) continue;

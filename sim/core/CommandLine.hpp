@@ -64,6 +64,7 @@ public:
 ///  - a CLI::ParseError, from parsing or thrown by body (a check CLI11 cannot express):
 ///    "<what> (see --help)", kExitBadInput;
 ///  - an ArgumentError from body: "<what>", kExitBadInput;
+///  - a StageError from body (sim/core/StageErrors.hpp): "<what>", its own code;
 ///  - another std::exception from body: the first entry of `errors` that matches it, in
 ///    order (list derived types before their bases, as catch clauses); if none does,
 ///    "<what>" and kExitFailure.

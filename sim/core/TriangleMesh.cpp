@@ -24,8 +24,8 @@ namespace ferro {
 
 namespace {
 
-[[noreturn]] void fail(const std::string& path, const std::string& reason) {
-    throw MeshFileError(path + ": " + reason);
+[[noreturn]] void fail(const std::string& path, const std::string& reason, int code = kExitBadInput) {
+    throw MeshFileError(path + ": " + reason, code);
 }
 
 std::string lower(std::string s) {
@@ -59,7 +59,7 @@ void writeParts(const std::string& path, const std::vector<std::pair<const void*
                 out.write(static_cast<const char*>(data), static_cast<std::streamsize>(size));
         });
     } catch (const AtomicFileError& e) {
-        fail(path, e.what());
+        fail(path, e.what(), kExitIoError);
     }
 }
 
@@ -312,7 +312,7 @@ void writeMesh(const std::string& path, const TriangleMesh& mesh, const std::str
 
 TriangleMesh readMesh(const std::string& path) {
     std::ifstream in(path, std::ios::binary);
-    if (!in) fail(path, std::string("cannot open: ") + std::strerror(errno));
+    if (!in) fail(path, std::string("cannot open: ") + std::strerror(errno), kExitIoError);
     // A PLY header is read by us (comments, count checks); any other format goes to assimp.
     PlyHeader header;
     bool isPly = true;

@@ -9,6 +9,7 @@
 // value` header lines: frame, time, and the magnets' state copied from the particle file);
 // every other format assimp can export (obj, stl, ...) goes through assimp. Reading accepts
 // any format assimp imports. Writes are atomic (temporary file, then rename).
+#include "sim/core/StageErrors.hpp"
 #include "sim/core/Types.hpp"
 
 #include <array>
@@ -20,9 +21,10 @@
 
 namespace ferro {
 
-class MeshFileError : public std::runtime_error {
+/// A mesh file that cannot be read (malformed: exit 2; missing: exit 4) or written (exit 4).
+class MeshFileError : public StageError {
 public:
-    using std::runtime_error::runtime_error;
+    explicit MeshFileError(const std::string& what, int code = kExitBadInput) : StageError(code, what) {}
 };
 
 struct TriangleMesh {
