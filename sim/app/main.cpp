@@ -1,5 +1,5 @@
 // ferro-sim: simulates a shot's fluid and writes one particle file per frame.
-// Parses arguments and calls the ferro_sim library; nothing else lives here.
+// Parses arguments and calls the ferro_app library; nothing else lives here.
 #include "sim/core/CommandLine.hpp"
 #include "sim/sph/FluidSimulation.hpp"
 #include "sim/core/ParticleFile.hpp"

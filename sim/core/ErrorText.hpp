@@ -1,6 +1,6 @@
 #pragma once
-// Error text for the stages' "ferro-<stage>: error: <reason>" lines. Header-only; ferro-surface,
-// ferro-spikes and ferro-pov share it (the later stages link ferro_surface anyway).
+// Error text for the stages' "ferro-<stage>: error: <reason>" lines. Header-only; every
+// stage's main folds a library's multi-line message with it.
 #include <cctype>
 #include <string>
 

@@ -11,7 +11,7 @@
 // itself included: on a cubic lattice the other particles' dipoles give the Lorentz local
 // field H_macro + M / 3 and the own sphere's -M / 3 cancels the cavity term, so the
 // particle field is the macroscopic field H of continuum magnetostatics (Clausius-Mossotti
-// done right; tests/test_magnetization.cpp checks a lattice sphere against 3 H0 / (3 + chi)).
+// done right; tests/sim/magnetics/test_MagnetizationSolver.cpp checks a lattice sphere against 3 H0 / (3 + chi)).
 //
 // Tree. Particles are sorted along a Morton curve (cubic root cell); octree cells are
 // contiguous index ranges. Each cell carries the multipole expansion of its dipoles about
@@ -25,7 +25,7 @@
 // the leaf's box): one interaction list per leaf (cells + particle ranges), built once per
 // set of positions and re-used by every field evaluation of a solve. Measured on a 40,960
 // particle layer: theta 0.5 -> ~0.1-0.4 % RMS error of the particle field, ~200 cells and
-// ~400 particles per target (see tests/bench_magnetization.cpp).
+// ~400 particles per target (see tests/bench/bench_magnetization.cpp).
 //
 // Numbers. Positions and moments are float inside (SoA, SSE kernels), scaled by the mean
 // particle radius so that float ranges do not depend on the scene's units. All-pairs sums

@@ -28,103 +28,9 @@ constexpr size_t kGrain = 256;
 /// SPlisHSPlasH tuned for water in SI units.
 constexpr Real kCohesionWeight = 1000;
 
-std::string fmtVec(const Vec3d& p) {
-    std::ostringstream s;
-    s.precision(5);
-    s << "(" << p.x() << ", " << p.y() << ", " << p.z() << ")";
-    return s.str();
-}
-
-/// Lattice points of a block at spacing s, offset s/2 from its faces.
-void latticeOfBlock(const FluidBlock& b, double s, std::vector<Vec3d>& out) {
-    out.clear();
-    Vec3d lo, hi;
-    if (b.shape == FluidBlock::Shape::Box) {
-        lo = b.min;
-        hi = b.max;
-    } else {
-        lo = b.center - Vec3d(b.radius, b.radius, 0);
-        hi = b.center + Vec3d(b.radius, b.radius, b.height);
-    }
-    int n[3];
-    for (int a = 0; a < 3; ++a) n[a] = std::max(0, int(std::floor((hi[a] - lo[a]) / s + 1e-9)));
-    // Centre the lattice in the block so the leftover gap is split on both sides.
-    Vec3d start;
-    for (int a = 0; a < 3; ++a) start[a] = 0.5 * (lo[a] + hi[a]) - 0.5 * (n[a] - 1) * s;
-    const double r2 = (b.radius - 0.5 * s) * (b.radius - 0.5 * s);
-    for (int k = 0; k < n[2]; ++k)
-        for (int j = 0; j < n[1]; ++j)
-            for (int i = 0; i < n[0]; ++i) {
-                const Vec3d p = start + s * Vec3d(i, j, k);
-                if (b.shape == FluidBlock::Shape::Cylinder) {
-                    const double dx = p.x() - b.center.x(), dy = p.y() - b.center.y();
-                    if (dx * dx + dy * dy > r2) continue;
-                }
-                out.push_back(p);
-            }
-}
-
-double blockVolume(const FluidBlock& b) {
-    if (b.shape == FluidBlock::Shape::Box) return (b.max - b.min).prod();
-    return kPi * b.radius * b.radius * b.height;
-}
-
 } // namespace
 
 namespace {
-
-/// Appends to `out` the indices j in [begin, end) with |x_j - p|^2 < h2, skipping `self`.
-/// Positions come as separate coordinate arrays so that blocks of 8 candidates are tested
-/// with SIMD into a bit mask and only the hits (about one in seven) are appended; the tail
-/// appends branch-free (write always, advance on a hit). An unpredictable branch per
-/// candidate used to dominate the search.
-inline uint32_t gatherRange(const Real* px, const Real* py, const Real* pz, uint32_t begin, uint32_t end,
-                            const Vec3& p, Real h2, uint32_t self, uint32_t* out, uint32_t count) {
-    const Real x = p.x(), y = p.y(), z = p.z();
-    uint32_t j = begin;
-#if defined(__SSE2__)
-    // SSE is part of x86-64: four distance tests per instruction, hits as a bit mask.
-    const __m128 vx = _mm_set1_ps(x), vy = _mm_set1_ps(y), vz = _mm_set1_ps(z), vh2 = _mm_set1_ps(h2);
-    for (; j + 8 <= end; j += 8) {
-        uint32_t mask = 0;
-        for (uint32_t l = 0; l < 8; l += 4) {
-            const __m128 dx = _mm_sub_ps(_mm_loadu_ps(px + j + l), vx);
-            const __m128 dy = _mm_sub_ps(_mm_loadu_ps(py + j + l), vy);
-            const __m128 dz = _mm_sub_ps(_mm_loadu_ps(pz + j + l), vz);
-            const __m128 d2 = _mm_add_ps(_mm_add_ps(_mm_mul_ps(dx, dx), _mm_mul_ps(dy, dy)), _mm_mul_ps(dz, dz));
-            mask |= uint32_t(_mm_movemask_ps(_mm_cmplt_ps(d2, vh2))) << l;
-        }
-        if (self - j < 8) mask &= ~(1u << (self - j));
-        while (mask) {
-            out[count++] = j + uint32_t(__builtin_ctz(mask));
-            mask &= mask - 1;
-        }
-    }
-#endif
-    for (; j < end; ++j) {
-        const Real dx = px[j] - x, dy = py[j] - y, dz = pz[j] - z;
-        out[count] = j;
-        count += uint32_t((dx * dx + dy * dy + dz * dz < h2) & (j != self));
-    }
-    return count;
-}
-
-/// Neighbours of `p` among the points of `grid` (coordinates px/py/pz), into `out`, which
-/// must hold `room` entries. Returns the count, or room + 1 if they did not fit.
-inline uint32_t gatherNeighbors(const SortedGrid& grid, const Real* px, const Real* py, const Real* pz,
-                                const Vec3& p, Real radius, uint32_t self, uint32_t* out, uint32_t room) {
-    uint32_t count = 0;
-    const Real h2 = radius * radius;
-    grid.forEachCandidateRange(p, [&](uint32_t beg, uint32_t end) {
-        if (count > room) return;
-        if (count + (end - beg) > room) {
-            count = room + 1;
-            return;
-        }
-        count = gatherRange(px, py, pz, beg, end, p, h2, self, out, count);
-    });
-    return count;
-}
 
 #if defined(__SSE2__)
 /// a[j[0..3]] in four lanes.
@@ -161,55 +67,6 @@ void splitCoordinates(const std::vector<Vec3>& x, std::vector<Real>& px, std::ve
 
 } // namespace
 
-FluidSeed seedFluid(const SimScene& scene, const Container& container) {
-    FluidSeed seed;
-    const auto& blocks = scene.fluid.blocks;
-    seed.spacing = scene.fluid.spacing;
-    std::vector<Vec3d> pts;
-    if (seed.spacing <= 0) {
-        // Derive the spacing from the first block with a count: the largest spacing
-        // whose lattice still holds that many particles (found by bisection).
-        const FluidBlock* first = nullptr;
-        for (const auto& b : blocks)
-            if (b.count > 0) { first = &b; break; }
-        if (!first) throw SceneError(scene.path + ": fluid.spacing: set a spacing or a block count");
-        const double guess = std::cbrt(blockVolume(*first) / double(first->count));
-        double lo = 0.5 * guess, hi = 1.5 * guess;
-        for (int it = 0; it < 60; ++it) {
-            const double mid = 0.5 * (lo + hi);
-            latticeOfBlock(*first, mid, pts);
-            (long(pts.size()) >= first->count ? lo : hi) = mid;
-        }
-        seed.spacing = lo;
-    }
-    const double s = seed.spacing;
-    for (size_t bi = 0; bi < blocks.size(); ++bi) {
-        const FluidBlock& b = blocks[bi];
-        const std::string key = "fluid.block[" + std::to_string(bi) + "]";
-        latticeOfBlock(b, s, pts);
-        if (b.count > 0) {
-            if (long(pts.size()) < b.count)
-                throw SceneError(b.where + ": " + key + ".count: the block holds only " +
-                                 std::to_string(pts.size()) + " particles at spacing " +
-                                 std::to_string(s) + " m (asked " + std::to_string(b.count) + ")");
-            // Keep the lowest particles: the trimmed layer is the free surface.
-            std::stable_sort(pts.begin(), pts.end(), [](const Vec3d& a, const Vec3d& c) { return a.z() < c.z(); });
-            pts.resize(size_t(b.count));
-        }
-        if (pts.empty())
-            throw SceneError(b.where + ": " + key + ": block is smaller than one particle spacing");
-        for (const Vec3d& p : pts) {
-            if (!container.contains(p, 0.25 * s))
-                throw SceneError(b.where + ": " + key + ": fluid outside the container (particle at " +
-                                 fmtVec(p) + ")");
-            seed.positions.push_back(p.cast<Real>());
-            seed.velocities.push_back(b.velocity.cast<Real>());
-        }
-    }
-    if (seed.positions.size() >= (size_t(1) << 32) - 1) throw SceneError(scene.path + ": too many particles");
-    return seed;
-}
-
 FluidSimulation::FluidSimulation(const SimScene& scene)
     : scene_(scene), container_(makeContainer(scene.container, scene.path)) {
     FluidSeed seed = seedFluid(scene_, *container_);
@@ -238,6 +95,19 @@ FluidSimulation::FluidSimulation(const SimScene& scene)
     rho_.assign(n, Real(rho0_));
     p_.assign(n, 0);
 
+    createPressureSolver();
+    sampleBoundary();
+    chooseSpeedScales();
+    setUpSurfaceTension();
+
+    if (!scene_.magnets.empty()) magnetics_ = std::make_unique<FluidMagnetics>(scene_, volume_, spacing_);
+
+    refreshNeighbors(true);
+    // The field of the initial state, so that frame 0 carries H and M too.
+    if (magnetics_) magnetics_->update(time_, x_, fluidNbr_, true);
+}
+
+void FluidSimulation::createPressureSolver() {
     // The pressure solver says how it sweeps the neighbour lists: DFSPH sweeps them a
     // dozen times a step and keeps each pair's kernel gradient (so does the induced Kelvin
     // force); WCSPH sweeps them once and takes small steps, so it evaluates the kernel in
@@ -254,9 +124,10 @@ FluidSimulation::FluidSimulation(const SimScene& scene)
     solver_ = solverEntry_->make(*this);
     storeGradients_ = solver_->storesGradients() || scene_.magnetization.inducedForce;
     skin_ = solver_->neighborSkin() * h_;
+}
 
+void FluidSimulation::sampleBoundary() {
     // Boundary particles and their Akinci volumes V_b = 1 / sum_k W_bk.
-
     bx_ = container_->sampleWalls(spacing_, 0.5 * spacing_);
     {
         std::vector<uint32_t> tie(bx_.size()), order;
@@ -291,7 +162,9 @@ FluidSimulation::FluidSimulation(const SimScene& scene)
         });
         bVolume_[b] = wallScale / sum;
     });
+}
 
+void FluidSimulation::chooseSpeedScales() {
     // Speed of sound for WCSPH: ten times the fastest expected flow speed keeps the
     // density error near 1 % (Monaghan). The speed is the free-fall speed over the fluid's
     // height above the container floor, or the initial speed, or the capillary speed.
@@ -319,23 +192,19 @@ FluidSimulation::FluidSimulation(const SimScene& scene)
     for (const Vec3& v : v_) vExpected = std::max(vExpected, double(v.norm()));
     soundSpeed_ = scene_.solver.soundSpeed > 0 ? scene_.solver.soundSpeed : 10 * std::max(vExpected, 0.1);
     viscosity_ = scene_.fluid.viscosity + scene_.solver.artificialViscosity * h_ * std::max(vExpected, 0.01);
+}
 
+void FluidSimulation::setUpSurfaceTension() {
     // Surface tension (Akinci 2013): the coefficient gamma [m/s^2] of its cohesion and
     // curvature terms scales as sigma / (rho0 s^2). Akinci's model has no physical
     // coefficient; kSurfaceTensionCalibration is measured on a free droplet (radius 11
     // spacings, zero gravity) so that its interior pressure grows with sigma as the Laplace
-    // pressure 2 sigma / R (tests/test_surface_tension.cpp checks it within 25 %).
+    // pressure 2 sigma / R (tests/sim/sph/test_SurfaceTension.cpp checks it within 25 %).
     constexpr double kSurfaceTensionCalibration = 0.0029;
     gamma_ = kSurfaceTensionCalibration * scene_.fluid.surfaceTension / (rho0_ * spacing_ * spacing_);
     // Capillary wave time step limit (Brackbill et al. 1992).
     if (scene_.fluid.surfaceTension > 0)
         capillaryDt_ = std::sqrt(rho0_ * spacing_ * spacing_ * spacing_ / (2 * kPi * scene_.fluid.surfaceTension));
-
-    if (!scene_.magnets.empty()) magnetics_ = std::make_unique<FluidMagnetics>(scene_, volume_, spacing_);
-
-    refreshNeighbors(true);
-    // The field of the initial state, so that frame 0 carries H and M too.
-    if (magnetics_) magnetics_->update(time_, x_, fluidNbr_, true);
 }
 
 FluidSimulation::~FluidSimulation() = default;
@@ -552,6 +421,44 @@ double FluidSimulation::chooseTimeStep(double dtLimit) const {
     return dt;
 }
 
+void FluidSimulation::computeSurfaceNormals() {
+    const size_t n = x_.size();
+    const Real V = Real(volume_);
+    const Real rho0 = Real(rho0_);
+    // Akinci 2013 surface normals n_i = h sum_j (m / rho_j) grad W_ij.
+    normal_.resize(n);
+#if defined(__SSE2__)
+    const CubicSplineKernel4 kernel4(kernel_);
+#endif
+    forEachParticle(n, [&](size_t i) {
+        Vec3 sum = Vec3::Zero();
+        uint32_t k = fluidNbr_.begin(i);
+        const uint32_t end = fluidNbr_.end(i);
+#if defined(__SSE2__)
+        {
+            const __m128 rho04 = _mm_set1_ps(rho0);
+            __m128 sx = _mm_setzero_ps(), sy = _mm_setzero_ps(), sz = _mm_setzero_ps();
+            for (; k + 4 <= end; k += 4) {
+                const uint32_t* j = &fluidNbr_.index[k];
+                const PairOffsets4 d(x_[i], px_.data(), py_.data(), pz_.data(), j);
+                const __m128 f =
+                    _mm_mul_ps(_mm_div_ps(rho04, gather4(rho_.data(), j)), kernel4.gradFactor(_mm_sqrt_ps(d.r2)));
+                sx = _mm_add_ps(sx, _mm_mul_ps(f, d.dx));
+                sy = _mm_add_ps(sy, _mm_mul_ps(f, d.dy));
+                sz = _mm_add_ps(sz, _mm_mul_ps(f, d.dz));
+            }
+            sum = Vec3(horizontalSum(sx), horizontalSum(sy), horizontalSum(sz));
+        }
+#endif
+        for (; k < end; ++k) {
+            const uint32_t j = fluidNbr_.index[k];
+            const Vec3 xij = x_[i] - x_[j];
+            sum += (rho0 / rho_[j]) * kernel_.gradW(xij, xij.norm());
+        }
+        normal_[i] = Real(h_) * V * sum;
+    });
+}
+
 void FluidSimulation::computeAccelerations(const Real* pOverRho2) {
     // One sweep a step, for every solver: the kernel is evaluated here (four pairs at a
     // time), which is cheaper than loading the gradients DFSPH stores for its iterations.
@@ -565,40 +472,7 @@ void FluidSimulation::computeAccelerations(const Real* pOverRho2) {
     const Real eps2 = Real(0.01 * h_ * h_);
     const bool tension = gamma_ > 0;
     const bool pressure = pOverRho2 != nullptr;
-    if (tension) {
-        // Akinci 2013 surface normals n_i = h sum_j (m / rho_j) grad W_ij.
-        normal_.resize(n);
-#if defined(__SSE2__)
-        const CubicSplineKernel4 kernel4(kernel_);
-#endif
-        forEachParticle(n, [&](size_t i) {
-            Vec3 sum = Vec3::Zero();
-            uint32_t k = fluidNbr_.begin(i);
-            const uint32_t end = fluidNbr_.end(i);
-#if defined(__SSE2__)
-            {
-                const __m128 rho04 = _mm_set1_ps(rho0);
-                __m128 sx = _mm_setzero_ps(), sy = _mm_setzero_ps(), sz = _mm_setzero_ps();
-                for (; k + 4 <= end; k += 4) {
-                    const uint32_t* j = &fluidNbr_.index[k];
-                    const PairOffsets4 d(x_[i], px_.data(), py_.data(), pz_.data(), j);
-                    const __m128 f =
-                        _mm_mul_ps(_mm_div_ps(rho04, gather4(rho_.data(), j)), kernel4.gradFactor(_mm_sqrt_ps(d.r2)));
-                    sx = _mm_add_ps(sx, _mm_mul_ps(f, d.dx));
-                    sy = _mm_add_ps(sy, _mm_mul_ps(f, d.dy));
-                    sz = _mm_add_ps(sz, _mm_mul_ps(f, d.dz));
-                }
-                sum = Vec3(horizontalSum(sx), horizontalSum(sy), horizontalSum(sz));
-            }
-#endif
-            for (; k < end; ++k) {
-                const uint32_t j = fluidNbr_.index[k];
-                const Vec3 xij = x_[i] - x_[j];
-                sum += (rho0 / rho_[j]) * kernel_.gradW(xij, xij.norm());
-            }
-            normal_[i] = Real(h_) * V * sum;
-        });
-    }
+    if (tension) computeSurfaceNormals();
     const Real gamma = Real(gamma_);
 #if defined(__SSE2__)
     const CubicSplineKernel4 kernel4(kernel_);

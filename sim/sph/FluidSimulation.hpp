@@ -10,6 +10,7 @@
 // of the state at its start (no parallel floating-point reductions whose order varies),
 // so runs are repeatable and resume bit-for-bit from a frame file.
 #include "sim/sph/Container.hpp"
+#include "sim/sph/FluidSeed.hpp"
 #include "sim/sph/FluidMagnetics.hpp"
 #include "sim/sph/Kernel.hpp"
 #include "sim/sph/NeighborSearch.hpp"
@@ -38,16 +39,6 @@ struct StepStats {
     size_t candidatePairs = 0;   ///< fluid-fluid pairs of the last search (support plus skin)
     size_t searches = 0;         ///< neighbour searches so far
 };
-
-/// Initial fluid particles of a scene (lattice fill of its blocks) and their spacing.
-struct FluidSeed {
-    double spacing = 0;
-    std::vector<Vec3> positions;
-    std::vector<Vec3> velocities;
-};
-/// Fills the scene's blocks; throws SceneError naming the block for fluid outside the
-/// container or a block that cannot hold its count.
-FluidSeed seedFluid(const SimScene& scene, const Container& container);
 
 class FluidSimulation {
 public:
@@ -137,12 +128,21 @@ public:
     Real divergence(size_t i, const std::vector<Vec3>& u) const;
 
 private:
+    // Construction, in order: the solver (it decides the neighbour search), the walls'
+    // boundary particles, the speed scales (WCSPH's speed of sound, artificial viscosity),
+    // the surface tension coefficient and its time step limit.
+    void createPressureSolver();
+    void sampleBoundary();
+    void chooseSpeedScales();
+    void setUpSurfaceTension();
     /// Brings the neighbour lists and densities up to date with the positions: a new
     /// search (particle sort, candidates within support plus skin) when `forceSearch` or
     /// when the skin may be used up, then this step's neighbours among the candidates.
     void refreshNeighbors(bool forceSearch);
     void searchCandidates();
     void updateNeighbors();
+    /// Akinci 2013 surface normals n_i = h V sum_j (rho0 / rho_j) grad W_ij, for tension.
+    void computeSurfaceNormals();
     double chooseTimeStep(double dtLimit) const;
     void integratePositions(double dt);
 

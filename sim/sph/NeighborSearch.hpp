@@ -12,6 +12,10 @@
 #include <cstdint>
 #include <vector>
 
+#if defined(__SSE2__)
+#include <emmintrin.h>
+#endif
+
 namespace ferro {
 
 /// Dense grid of cells, one search radius wide, over an axis-aligned box. (Cells of half
@@ -63,6 +67,59 @@ private:
     std::vector<uint32_t> cellStart_; // size cellCount + 1
     std::vector<uint64_t> keys_;
 };
+
+/// Appends to `out` the indices j in [begin, end) with |x_j - p|^2 < h2, skipping `self`.
+/// Positions come as separate coordinate arrays so that blocks of 8 candidates are tested
+/// with SIMD into a bit mask and only the hits (about one in seven) are appended; the tail
+/// appends branch-free (write always, advance on a hit). An unpredictable branch per
+/// candidate used to dominate the search.
+inline uint32_t gatherRange(const Real* px, const Real* py, const Real* pz, uint32_t begin, uint32_t end,
+                            const Vec3& p, Real h2, uint32_t self, uint32_t* out, uint32_t count) {
+    const Real x = p.x(), y = p.y(), z = p.z();
+    uint32_t j = begin;
+#if defined(__SSE2__)
+    // SSE is part of x86-64: four distance tests per instruction, hits as a bit mask.
+    const __m128 vx = _mm_set1_ps(x), vy = _mm_set1_ps(y), vz = _mm_set1_ps(z), vh2 = _mm_set1_ps(h2);
+    for (; j + 8 <= end; j += 8) {
+        uint32_t mask = 0;
+        for (uint32_t l = 0; l < 8; l += 4) {
+            const __m128 dx = _mm_sub_ps(_mm_loadu_ps(px + j + l), vx);
+            const __m128 dy = _mm_sub_ps(_mm_loadu_ps(py + j + l), vy);
+            const __m128 dz = _mm_sub_ps(_mm_loadu_ps(pz + j + l), vz);
+            const __m128 d2 = _mm_add_ps(_mm_add_ps(_mm_mul_ps(dx, dx), _mm_mul_ps(dy, dy)), _mm_mul_ps(dz, dz));
+            mask |= uint32_t(_mm_movemask_ps(_mm_cmplt_ps(d2, vh2))) << l;
+        }
+        if (self - j < 8) mask &= ~(1u << (self - j));
+        while (mask) {
+            out[count++] = j + uint32_t(__builtin_ctz(mask));
+            mask &= mask - 1;
+        }
+    }
+#endif
+    for (; j < end; ++j) {
+        const Real dx = px[j] - x, dy = py[j] - y, dz = pz[j] - z;
+        out[count] = j;
+        count += uint32_t((dx * dx + dy * dy + dz * dz < h2) & (j != self));
+    }
+    return count;
+}
+
+/// Neighbours of `p` among the points of `grid` (coordinates px/py/pz), into `out`, which
+/// must hold `room` entries. Returns the count, or room + 1 if they did not fit.
+inline uint32_t gatherNeighbors(const SortedGrid& grid, const Real* px, const Real* py, const Real* pz,
+                                const Vec3& p, Real radius, uint32_t self, uint32_t* out, uint32_t room) {
+    uint32_t count = 0;
+    const Real h2 = radius * radius;
+    grid.forEachCandidateRange(p, [&](uint32_t beg, uint32_t end) {
+        if (count > room) return;
+        if (count + (end - beg) > room) {
+            count = room + 1;
+            return;
+        }
+        count = gatherRange(px, py, pz, beg, end, p, h2, self, out, count);
+    });
+    return count;
+}
 
 /// Neighbour lists in fixed slots. Particle i owns the slots [offset[i], offset[i + 1]),
 /// one for every candidate of the last search (within the kernel support plus a skin, so

@@ -55,7 +55,7 @@ struct PressureSolverEntry {
 
 /// Every registered solver, in the order the scene file lists them.
 const std::vector<PressureSolverEntry>& pressureSolvers();
-/// The names of pressureSolvers(), for the scene parser's choice of `sim.solver`.
+/// The names of pressureSolvers(), for messages, benchmarks and tests.
 std::vector<std::string> pressureSolverNames();
 /// The entry called `name`; throws std::invalid_argument listing the names if none is.
 const PressureSolverEntry& findPressureSolver(const std::string& name);

@@ -41,6 +41,11 @@ SimScene damBreak40k(const std::string& kind, double surfaceTension) {
 
 } // namespace
 
+bool isPressureSolver(const std::string& name) {
+    const std::vector<std::string> names = pressureSolverNames();
+    return std::find(names.begin(), names.end(), name) != names.end();
+}
+
 int main(int argc, char** argv) {
     int threads = 2;
     double seconds = 0.1, warmup = 0.05;
@@ -55,8 +60,8 @@ int main(int argc, char** argv) {
             return 2;
         }
     }
-    if (threads < 1 || !(seconds > 0) || !(warmup >= 0) || (solver != "all" && solver != "wcsph" && solver != "dfsph")) {
-        std::fprintf(stderr, "bench-sim: error: --threads >= 1, --seconds > 0, --warmup >= 0, --solver all|wcsph|dfsph\n");
+    if (threads < 1 || !(seconds > 0) || !(warmup >= 0) || (solver != "all" && !isPressureSolver(solver))) {
+        std::fprintf(stderr, "bench-sim: error: --threads >= 1, --seconds > 0, --warmup >= 0, --solver all or a registered solver (wcsph, dfsph)\n");
         return 2;
     }
     tbb::global_control limit(tbb::global_control::max_allowed_parallelism, size_t(threads));

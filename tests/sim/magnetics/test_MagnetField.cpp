@@ -1,7 +1,7 @@
 // Analytic magnet fields (sim/magnetics/MagnetField): closed forms, Biot-Savart, far-field limits,
 // softening and keyframe interpolation.
 #include "sim/magnetics/MagnetField.hpp"
-#include "sim/sph/Kernel.hpp"
+#include "sim/core/Constants.hpp"
 
 #include <Eigen/Geometry>
 #include <catch2/catch.hpp>

@@ -2,7 +2,7 @@
 // law, the analytic magnetizable sphere, the solvers against each other, field gradients,
 // far fields and regularization.
 #include "sim/magnetics/MagnetizationSolver.hpp"
-#include "sim/sph/Kernel.hpp"
+#include "sim/core/Constants.hpp"
 
 #include <catch2/catch.hpp>
 
