@@ -2,7 +2,8 @@
 #include "spikes/SpikeMapper.hpp"
 #include "sim/core/Constants.hpp"
 
-#include "sim/magnetics/MagnetizationSolver.hpp"
+#include "spikes/PointGrid.hpp"
+#include "spikes/SurfaceFields.hpp"
 #include "spikes/SurfaceGeometry.hpp"
 
 #include <Eigen/Dense>
@@ -16,58 +17,6 @@
 namespace ferro {
 
 namespace {
-
-
-double smoothstep01(double x)
-{
-    x = std::clamp(x, 0.0, 1.0);
-    return x * x * (3.0 - 2.0 * x);
-}
-
-Vec3d toD(const Vec3& v) { return v.cast<double>(); }
-
-// Points in a uniform hash grid, for radius queries.
-class PointGrid {
-public:
-    PointGrid(const std::vector<Vec3d>& points, double cell) : points_(points), cell_(cell > 0 ? cell : 1.0)
-    {
-        for (size_t i = 0; i < points_.size(); ++i) cells_[key(cellOf(points_[i]))].push_back(uint32_t(i));
-    }
-    bool empty() const { return points_.empty(); }
-    /// Calls f(index, squared distance) for every point within `radius` of x.
-    template <class F> void forEachWithin(const Vec3d& x, double radius, F&& f) const
-    {
-        const Eigen::Vector3i lo = cellOf(x - Vec3d::Constant(radius)), hi = cellOf(x + Vec3d::Constant(radius));
-        const double r2 = radius * radius;
-        for (int a = lo.x(); a <= hi.x(); ++a)
-            for (int b = lo.y(); b <= hi.y(); ++b)
-                for (int c = lo.z(); c <= hi.z(); ++c) {
-                    auto it = cells_.find(key(Eigen::Vector3i(a, b, c)));
-                    if (it == cells_.end()) continue;
-                    for (uint32_t i : it->second) {
-                        const double d2 = (points_[i] - x).squaredNorm();
-                        if (d2 <= r2) f(i, d2);
-                    }
-                }
-    }
-    /// Distance to the nearest point, or `cap` if none is closer than cap.
-    double nearestDistance(const Vec3d& x, double cap) const
-    {
-        double best = cap * cap;
-        forEachWithin(x, cap, [&](uint32_t, double d2) { best = std::min(best, d2); });
-        return std::sqrt(best);
-    }
-
-private:
-    Eigen::Vector3i cellOf(const Vec3d& x) const { return (x / cell_).array().floor().cast<int>(); }
-    static int64_t key(const Eigen::Vector3i& c)
-    {
-        return (int64_t(c.x() & 0x1FFFFF) << 42) | (int64_t(c.y() & 0x1FFFFF) << 21) | int64_t(c.z() & 0x1FFFFF);
-    }
-    std::vector<Vec3d> points_;
-    double cell_;
-    std::unordered_map<int64_t, std::vector<uint32_t>> cells_;
-};
 
 // Lattice axes A_k of the six trace directions in (e1, e2) coordinates, e2 = e1 rotated by 60 deg.
 const int kAxis[6][2] = {{1, 0}, {0, 1}, {-1, 1}, {-1, 0}, {0, -1}, {1, -1}};
@@ -90,20 +39,6 @@ double fieldDominance(const Vec3d& H)
 {
     const double h2 = H.squaredNorm();
     return h2 * h2 * h2;
-}
-
-// Spikes grow along the field, outward, tilted at most maxTilt [deg] from the normal n.
-Vec3d growthDirection(const Vec3d& H, const Vec3d& n, double maxTilt)
-{
-    Vec3d dir = H.norm() > 0 ? Vec3d(H.normalized()) : n;
-    if (dir.dot(n) < 0) dir = -dir;
-    const double cosMax = std::cos(maxTilt * kPi / 180.0);
-    if (dir.dot(n) < cosMax) {
-        Vec3d tangent = dir - dir.dot(n) * n;
-        tangent = tangent.norm() > 0 ? Vec3d(tangent.normalized()) : Vec3d::Zero();
-        dir = cosMax * n + std::sqrt(std::max(0.0, 1 - cosMax * cosMax)) * tangent;
-    }
-    return dir;
 }
 
 struct Pattern {
@@ -131,73 +66,6 @@ std::vector<double> vertexAreas(const TriangleMesh& mesh)
     }
     return area;
 }
-
-// Everything evaluated per point of the surface; shared by the passes below.
-class SurfaceFields {
-public:
-    SurfaceFields(const SpikeInput& in, const SpikeParams& p, double Mc) : in_(in), p_(p), Mc_(Mc)
-    {
-        const SpikeParticles& particles = in.particles;
-        spacing_ = particles.spacing > 0 ? particles.spacing : in.fluid.particleSpacing;
-        if (!particles.magnetization.empty() && particles.magnetization.size() == particles.positions.size() &&
-            spacing_ > 0) {
-            radius_ = 2.0 * spacing_;
-            particleGrid_ = std::make_unique<PointGrid>(particles.positions, radius_);
-        }
-        wallMargin_ = p.wallMargin > 0 ? p.wallMargin : (spacing_ > 0 ? 1.5 * spacing_ : 2e-3);
-    }
-
-    /// H at a surface point x with outward normal n: the magnets at x, the particles' field a
-    /// little above x (two particle spacings out along n), where the discrete particles blur
-    /// into the continuum they stand for (right at the surface a single particle's near
-    /// field would turn the spikes every which way).
-    Vec3d field(const Vec3d& x, const Vec3d& n) const
-    {
-        Vec3d H = magnetField(in_.magnets, x);
-        if (in_.particleField) H += in_.particleField(x + 2.0 * spacing_ * n);
-        return H;
-    }
-
-    /// |M| at a surface point: the particles' M around it, else the law at the local field.
-    double magnetization(const Vec3d& x, const Vec3d& H) const
-    {
-        if (particleGrid_) {
-            double sum = 0, weight = 0;
-            const double r2 = radius_ * radius_;
-            particleGrid_->forEachWithin(x, radius_, [&](uint32_t i, double d2) {
-                const double q = 1.0 - d2 / r2;
-                const double w = q * q * q;
-                sum += w * in_.particles.magnetization[i];
-                weight += w;
-            });
-            if (weight > 0) return sum / weight;
-        }
-        return langevinMagnetization(H.norm(), in_.fluid.law.susceptibility, in_.fluid.law.saturation);
-    }
-
-    /// 0 at M_c, 1 from (1 + fade) M_c on, smooth: scales each spike's height (taken at its tip,
-    /// so a spike at the area's edge is lower but still a symmetric cone).
-    double magnetizationFade(double M) const
-    {
-        if (!(M > Mc_) || !std::isfinite(Mc_)) return 0.0;
-        return smoothstep01((M - Mc_) / (p_.magnetizationFade * std::max(Mc_, 1e-30)));
-    }
-    /// 0 at M_c, 1 from 1.05 M_c on, smooth: cuts the surface exactly where |M| drops below M_c.
-    double magnetizationGate(double M) const
-    {
-        if (!(M > Mc_) || !std::isfinite(Mc_)) return 0.0;
-        return smoothstep01((M - Mc_) / (0.05 * std::max(Mc_, 1e-30)));
-    }
-
-    bool wetted(const Vec3d& x) const { return in_.fluid.container && !in_.fluid.container->contains(x, wallMargin_); }
-
-private:
-    const SpikeInput& in_;
-    const SpikeParams& p_;
-    double Mc_;
-    double spacing_ = 0, radius_ = 0, wallMargin_ = 0;
-    std::unique_ptr<PointGrid> particleGrid_;
-};
 
 // The free surface a line meets nearest to p (triangles with a non-wetted vertex).
 bool nearestFreeHit(const SurfaceRayCaster& caster, const TriangleMesh& mesh, const std::vector<char>& wetted,
