@@ -18,6 +18,7 @@
 #include <cstring>
 #include <exception>
 #include <fstream>
+#include <functional>
 #include <memory>
 #include <iostream>
 #include <mutex>
@@ -69,6 +70,91 @@ std::string formatDouble(double v)
 
 } // namespace
 
+namespace {
+
+// The frame's magnets, in order of preference: the particle file's header (when there is a
+// particle file), the mesh's header, the scene's tracks at the frame's time (header `time`,
+// else `frame` / fps, else frameHint / fps, else 0 s). Throws ParticleFileError on a
+// malformed magnet header.
+std::vector<Magnet> frameMagnets(const SpikeScene& scene, const ParticleTable& particles, bool haveParticles,
+                                 const ParticleTable& meshHeader, int frameHint)
+{
+    if (haveParticles && hasComment(particles.comments, "magnet_count")) return readMagnetComments(particles);
+    if (hasComment(meshHeader.comments, "magnet_count")) return readMagnetComments(meshHeader);
+    double time = std::nan("");
+    for (const ParticleTable* t : {&particles, &meshHeader}) {
+        if (!std::isnan(time)) break;
+        time = t->commentNumber("time", std::nan(""));
+        if (std::isnan(time)) {
+            const double frame = t->commentNumber("frame", std::nan(""));
+            if (!std::isnan(frame)) time = frame / scene.fps;
+        }
+    }
+    if (std::isnan(time)) time = frameHint >= 0 ? frameHint / scene.fps : 0.0;
+    std::vector<Magnet> magnets;
+    for (const MagnetTrack& track : scene.magnets) magnets.push_back(track.at(time));
+    return magnets;
+}
+
+// The field [A/m] of the magnetized particles (positions x [m], magnetization M [A/m]) at a
+// point: each particle a sphere of its volume m / rho = rho0 h^3 / rho (h = spacing [m], rho0
+// the fluid's rest density, rho the file's `density` column where present; the simulator's
+// model, sim/magnetics/MagnetizationSolver.hpp), summed by a tree (opening angle 0.6).
+std::function<Vec3d(const Vec3d&)> particleFieldOf(const ParticleTable& particles, const std::vector<Vec3>& x,
+                                                   const std::vector<Vec3>& M, double spacing, double restDensity)
+{
+    const int rho = particles.column("density");
+    const double h3 = std::pow(spacing, 3);
+    std::vector<Real> volume(x.size(), Real(h3));
+    if (rho >= 0)
+        for (size_t i = 0; i < x.size(); ++i) {
+            const double r = particles.at(i, rho);
+            if (r > 0) volume[i] = Real(h3 * restDensity / r);
+        }
+    auto evaluator = std::make_shared<ParticleFieldEvaluator>();
+    evaluator->build(x, volume, M, 0.6);
+    return [evaluator](const Vec3d& p) { return evaluator->inducedField(p); };
+}
+
+// The frame's particles (a non-empty table read from particlePath) into in.particles:
+// positions [m], spacing (header, else the fluid's) [m] and |M| [A/m] per particle (the mx,
+// my, mz columns, else the fluid's law in the magnets' field), and with those columns (and
+// [spikes] particle_field) in.particleField. Sets in.fluid.particleSpacing to a known
+// spacing. Throws SpikeInputError on a malformed table, non-finite positions or |M|.
+void loadParticles(const SpikeScene& scene, const ParticleTable& particles, const std::string& particlePath,
+                   SpikeInput& in)
+{
+    try {
+        const std::vector<Vec3> x = particles.vec3("x", "y", "z");
+        for (size_t i = 0; i < x.size(); ++i)
+            if (!x[i].allFinite())
+                throw SpikeInputError(particlePath + ": particle " + std::to_string(i) + " has a non-finite position");
+        in.particles.positions.reserve(x.size());
+        for (const Vec3& p : x) in.particles.positions.push_back(p.cast<double>());
+        in.particles.spacing = particles.commentNumber("spacing", in.fluid.particleSpacing);
+        in.particles.magnetization.resize(x.size());
+        if (particles.column("mx") >= 0 && particles.column("my") >= 0 && particles.column("mz") >= 0) {
+            const std::vector<Vec3> M = particles.vec3("mx", "my", "mz");
+            for (size_t i = 0; i < M.size(); ++i) in.particles.magnetization[i] = double(M[i].norm());
+            if (scene.params.particleField && in.particles.spacing > 0)
+                in.particleField = particleFieldOf(particles, x, M, in.particles.spacing, in.fluid.density);
+        } else {
+            // Older files: the fluid's law in the magnets' field at the particle.
+            for (size_t i = 0; i < x.size(); ++i)
+                in.particles.magnetization[i] =
+                    langevinMagnetization(magnetField(in.magnets, in.particles.positions[i]).norm(),
+                                          in.fluid.law.susceptibility, in.fluid.law.saturation);
+        }
+    } catch (const ParticleFileError& e) {
+        throw SpikeInputError(particlePath + ": " + e.what());
+    }
+    for (double m : in.particles.magnetization)
+        if (!std::isfinite(m)) throw SpikeInputError(particlePath + ": non-finite magnetization");
+    if (in.particles.spacing > 0) in.fluid.particleSpacing = in.particles.spacing;
+}
+
+} // namespace
+
 SpikeInput loadSpikeInput(const SpikeScene& scene, const std::string& surfacePath, const std::string& particlePath,
                           int frameHint)
 {
@@ -91,24 +177,7 @@ SpikeInput loadSpikeInput(const SpikeScene& scene, const std::string& surfacePat
     const bool haveParticles = !particlePath.empty();
     try {
         if (haveParticles) particles = readParticleFile(particlePath);
-        // Magnets: particle header, then mesh header, then the scene at the frame's time.
-        if (haveParticles && hasComment(particles.comments, "magnet_count")) {
-            in.magnets = readMagnetComments(particles);
-        } else if (hasComment(meshHeader.comments, "magnet_count")) {
-            in.magnets = readMagnetComments(meshHeader);
-        } else {
-            double time = std::nan("");
-            for (const ParticleTable* t : {&particles, &meshHeader}) {
-                if (!std::isnan(time)) break;
-                time = t->commentNumber("time", std::nan(""));
-                if (std::isnan(time)) {
-                    const double frame = t->commentNumber("frame", std::nan(""));
-                    if (!std::isnan(frame)) time = frame / scene.fps;
-                }
-            }
-            if (std::isnan(time)) time = frameHint >= 0 ? frameHint / scene.fps : 0.0;
-            for (const MagnetTrack& track : scene.magnets) in.magnets.push_back(track.at(time));
-        }
+        in.magnets = frameMagnets(scene, particles, haveParticles, meshHeader, frameHint);
     } catch (const ParticleFileError& e) {
         throw SpikeInputError(e.what());
     }
@@ -119,48 +188,7 @@ SpikeInput loadSpikeInput(const SpikeScene& scene, const std::string& surfacePat
     if (!(in.fluid.law.susceptibility >= 0) || !(in.fluid.law.saturation >= 0))
         throw SpikeInputError(surfacePath + ": negative susceptibility or saturation in the header");
 
-    if (haveParticles && particles.rows() > 0) {
-        try {
-            const std::vector<Vec3> x = particles.vec3("x", "y", "z");
-            for (size_t i = 0; i < x.size(); ++i)
-                if (!x[i].allFinite())
-                    throw SpikeInputError(particlePath + ": particle " + std::to_string(i) + " has a non-finite position");
-            in.particles.positions.reserve(x.size());
-            for (const Vec3& p : x) in.particles.positions.push_back(p.cast<double>());
-            in.particles.spacing = particles.commentNumber("spacing", in.fluid.particleSpacing);
-            in.particles.magnetization.resize(x.size());
-            if (particles.column("mx") >= 0 && particles.column("my") >= 0 && particles.column("mz") >= 0) {
-                const std::vector<Vec3> M = particles.vec3("mx", "my", "mz");
-                for (size_t i = 0; i < M.size(); ++i) in.particles.magnetization[i] = double(M[i].norm());
-                if (scene.params.particleField && in.particles.spacing > 0) {
-                    // The magnetized particles' own field: each particle a sphere of its volume
-                    // m / rho = rho0 h^3 / rho (the simulator's model, sim/magnetics/MagnetizationSolver.hpp).
-                    const int rho = particles.column("density");
-                    const double h3 = std::pow(in.particles.spacing, 3);
-                    std::vector<Real> volume(x.size(), Real(h3));
-                    if (rho >= 0)
-                        for (size_t i = 0; i < x.size(); ++i) {
-                            const double r = particles.at(i, rho);
-                            if (r > 0) volume[i] = Real(h3 * in.fluid.density / r);
-                        }
-                    auto evaluator = std::make_shared<ParticleFieldEvaluator>();
-                    evaluator->build(x, volume, M, 0.6);
-                    in.particleField = [evaluator](const Vec3d& p) { return evaluator->inducedField(p); };
-                }
-            } else {
-                // Older files: the fluid's law in the magnets' field at the particle.
-                for (size_t i = 0; i < x.size(); ++i)
-                    in.particles.magnetization[i] =
-                        langevinMagnetization(magnetField(in.magnets, in.particles.positions[i]).norm(),
-                                              in.fluid.law.susceptibility, in.fluid.law.saturation);
-            }
-        } catch (const ParticleFileError& e) {
-            throw SpikeInputError(particlePath + ": " + e.what());
-        }
-        for (double m : in.particles.magnetization)
-            if (!std::isfinite(m)) throw SpikeInputError(particlePath + ": non-finite magnetization");
-        if (in.particles.spacing > 0) in.fluid.particleSpacing = in.particles.spacing;
-    }
+    if (haveParticles && particles.rows() > 0) loadParticles(scene, particles, particlePath, in);
     return in;
 }
 

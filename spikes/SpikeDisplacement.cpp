@@ -1,0 +1,137 @@
+// The displacement of SpikeDisplacement.hpp.
+#include "spikes/SpikeDisplacement.hpp"
+
+#include <tbb/parallel_for.h>
+
+#include <algorithm>
+
+namespace ferro {
+
+namespace {
+
+// Each pattern's field dominance at a point and their sum.
+struct Dominance {
+    std::vector<double> dominance; // per pattern
+    double sum = 0;
+    // The pattern's share of the blend (equal shares where no magnet has a field).
+    double share(size_t p) const { return sum > 0 ? dominance[p] / sum : 1.0 / double(dominance.size()); }
+};
+
+Dominance patternDominance(const SpikeSurface& s, const Vec3d& x)
+{
+    Dominance d;
+    d.dominance.resize(s.patterns.size());
+    for (size_t p = 0; p < s.patterns.size(); ++p) {
+        d.dominance[p] = fieldDominance(magnetField(s.magnets[size_t(s.patterns[p].info.magnet)], x));
+        d.sum += d.dominance[p];
+    }
+    return d;
+}
+
+// One pattern's tips around a point: the partition-of-unity sums of eq. 13's profile (s, over
+// weights w, radius l) and the narrow-kernel sums of amplitude and direction (a, dir, over
+// weights wa, radius 0.75 l).
+struct TipSums {
+    double s = 0, w = 0, a = 0, wa = 0;
+    Vec3d dir = Vec3d::Zero();
+};
+
+TipSums sumNearbyTips(const Pattern& pat, const Vec3d& x)
+{
+    const double R = pat.info.spacing, Rn = 0.75 * R;
+    TipSums sums;
+    pat.grid->forEachWithin(x, R, [&](uint32_t t, double d2) {
+        const Tip& tip = pat.tips[t];
+        const double q = 1.0 - d2 / (R * R);
+        const double wt = q * q;
+        const Eigen::Vector2d ab = tip.toLattice * (x - tip.position);
+        sums.s += wt * hexProfile(ab.x(), ab.y());
+        sums.w += wt;
+        if (d2 < Rn * Rn) {
+            const double qn = 1.0 - d2 / (Rn * Rn);
+            const double wn = qn * qn * qn * qn;
+            sums.a += wn * tip.amplitude;
+            sums.dir += wn * tip.direction;
+            sums.wa += wn;
+        }
+    });
+    return sums;
+}
+
+} // namespace
+
+WettedWall findWettedWall(const TriangleMesh& mesh, const SurfaceFields& fields, const SpikeParams& P,
+                          double minSpacing)
+{
+    const size_t n = mesh.vertices.size();
+    std::vector<char> wetted(n, 0);
+    tbb::parallel_for(size_t(0), n, [&](size_t v) { wetted[v] = fields.wetted(toD(mesh.vertices[v])); });
+    std::vector<Vec3d> wettedPoints;
+    for (size_t v = 0; v < n; ++v)
+        if (wetted[v]) wettedPoints.push_back(toD(mesh.vertices[v]));
+    const double wallFade = P.wallFade > 0 ? P.wallFade : 0.5 * minSpacing;
+    return WettedWall{std::move(wetted), PointGrid(wettedPoints, wallFade), wallFade};
+}
+
+double spikeDisplacement(const SpikeSurface& surface, const Vec3d& x, const Vec3d& nx, double& weight,
+                         Vec3d& direction)
+{
+    const SurfaceFields& fields = surface.fields;
+    const std::vector<Pattern>& patterns = surface.patterns;
+    const SpikeParams& P = surface.P;
+    const WettedWall& wall = surface.wall;
+    weight = 0;
+    direction = nx;
+    if (fields.wetted(x)) return 0;
+    const Vec3d H = fields.field(x, nx);
+    const double M = fields.magnetization(x, H);
+    const double fade = fields.magnetizationGate(M) *
+                        (wall.grid.empty() ? 1.0 : smoothstep01(wall.grid.nearestDistance(x, wall.fade) / wall.fade));
+    if (fade <= 0) return 0;
+    // Per pattern: eq. 13 from every nearby tip's lattice map, blended by a smooth partition
+    // of unity (radius l; exact on a regular lattice), and each spike's amplitude and
+    // direction from its own tip (a narrow kernel, radius 0.75 l, so each spike is a rigid,
+    // symmetric cone leaning along the field at its tip; blended between spikes).
+    double S = 0, W = 0, A = 0, WA = 0;
+    Vec3d D = Vec3d::Zero();
+    const Dominance dominance = patternDominance(surface, x);
+    for (size_t p = 0; p < patterns.size(); ++p) {
+        const double d = dominance.share(p);
+        if (d < 1e-4) continue;
+        const TipSums sums = sumNearbyTips(patterns[p], x);
+        S += d * sums.s;
+        W += d * sums.w;
+        A += d * sums.a;
+        D += d * sums.dir;
+        WA += d * sums.wa;
+    }
+    if (!(W > 0)) return 0;
+    const double coverage = smoothstep01(W / 0.4);
+    const double F = sharpenedProfile(S / W, P.sharpness);
+    // Far from every tip (trough centres of a stretched lattice) the local field takes over.
+    constexpr double eps = 1e-3;
+    double spacing = 0;
+    for (size_t p = 0; p < patterns.size(); ++p) spacing += dominance.share(p) * patterns[p].info.spacing;
+    const double localC0 = std::min(P.beta * H.norm(), P.maxAspect * spacing / 3.0) * fields.magnetizationFade(M);
+    const double C0 = (A + eps * localC0) / (WA + eps);
+    const Vec3d dir = growthDirection(D + eps * growthDirection(H, nx, P.maxTilt), nx, P.maxTilt);
+    weight = fade * coverage;
+    direction = dir;
+    return weight * C0 * F;
+}
+
+std::vector<double> displaceVertices(const SpikeSurface& surface, const RefinedSurface& refined, TriangleMesh& out)
+{
+    const size_t n = refined.mesh.vertices.size();
+    std::vector<double> weight(n, 0.0);
+    out = refined.mesh;
+    tbb::parallel_for(size_t(0), n, [&](size_t v) {
+        if (surface.wall.wetted[v]) return;
+        Vec3d dir;
+        const double z = spikeDisplacement(surface, toD(refined.mesh.vertices[v]), refined.normals[v], weight[v], dir);
+        out.vertices[v] = (toD(refined.mesh.vertices[v]) + z * dir).cast<float>();
+    });
+    return weight;
+}
+
+} // namespace ferro

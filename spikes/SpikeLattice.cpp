@@ -1,0 +1,210 @@
+// Tracing the hexagonal lattice of SpikeLattice.hpp.
+#include "spikes/SpikeLattice.hpp"
+
+#include "sim/core/Constants.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <unordered_map>
+
+namespace ferro {
+
+namespace {
+
+Vec3d faceNormal(const TriangleMesh& mesh, uint32_t t)
+{
+    const auto& tri = mesh.triangles[t];
+    const Vec3d a = toD(mesh.vertices[tri[0]]), b = toD(mesh.vertices[tri[1]]), c = toD(mesh.vertices[tri[2]]);
+    const Vec3d n = (b - a).cross(c - a);
+    const double len = n.norm();
+    return len > 0 ? Vec3d(n / len) : Vec3d(0, 0, 1);
+}
+
+// Lattice axes A_k of the six trace directions in (e1, e2) coordinates, e2 = e1 rotated by 60 deg.
+const int kAxis[6][2] = {{1, 0}, {0, 1}, {-1, 1}, {-1, 0}, {0, -1}, {1, -1}};
+
+int64_t latticeKey(int i, int j) { return (int64_t(i) << 32) ^ int64_t(uint32_t(j)); }
+
+// What tracing one pattern needs: the surface, the fields, M_c [A/m] and the pattern's frame
+// (origin x0 [m], unit normal n0, unit axes e1 and e1perp = n0 x e1, spacing l [m]).
+struct TraceFrame {
+    const FreeSurface& surface;
+    const SurfaceFields& fields;
+    double Mc;
+    Vec3d x0, n0, e1, e1perp;
+    double l;
+};
+
+// The tips traced so far; the first tip at lattice coordinates (i, j) wins.
+struct LatticeTips {
+    std::vector<Tip> tips;
+    std::unordered_map<int64_t, size_t> index; // latticeKey(i, j) -> tips
+};
+
+void addTip(LatticeTips& lattice, int i, int j, const Vec3d& x, const Vec3d& n)
+{
+    if (lattice.index.count(latticeKey(i, j))) return;
+    lattice.index[latticeKey(i, j)] = lattice.tips.size();
+    lattice.tips.push_back({i, j, x, n, Eigen::Matrix<double, 2, 3>::Zero()});
+}
+
+bool tipPosition(const LatticeTips& lattice, int i, int j, Vec3d& x)
+{
+    auto it = lattice.index.find(latticeKey(i, j));
+    if (it == lattice.index.end()) return false;
+    x = lattice.tips[it->second].position;
+    return true;
+}
+
+// The field line through x [m] meets the free surface within 0.75 l: the next mapping
+// coordinate s [m] and the surface normal n there (the field at x uses the normal n0).
+bool dropOnSurface(const TraceFrame& f, const Vec3d& x, Vec3d& s, Vec3d& n)
+{
+    Vec3d H = f.fields.field(x, f.n0);
+    if (!(H.norm() > 0)) H = f.n0;
+    return nearestFreeHit(f.surface, x, H, 0.75 * f.l, s, n);
+}
+
+// Supercritical at surface point s with normal n: |M| > M_c.
+bool alive(const TraceFrame& f, const Vec3d& s, const Vec3d& n)
+{
+    return f.fields.magnetization(s, f.fields.field(s, n)) > f.Mc;
+}
+
+// Fig. 7b: adds the origin tip and traces the six axes from x0 along the surface with step l
+// (eq. 15: along the tangent at the previous tip), at most maxRings tips per axis, until two
+// subcritical tips in a row. Returns per axis k the traced points, x0 first [m].
+void traceAxes(const TraceFrame& f, int maxRings, LatticeTips& lattice, std::vector<Vec3d> (&axisTips)[6])
+{
+    const double l = f.l;
+    addTip(lattice, 0, 0, f.x0, f.n0);
+    for (int k = 0; k < 6; ++k) {
+        Vec3d s = f.x0, n = f.n0;
+        Vec3d d = std::cos(k * kPi / 3) * f.e1 + std::sin(k * kPi / 3) * f.e1perp;
+        axisTips[k].push_back(f.x0);
+        int dead = 0;
+        for (int ring = 1; ring <= maxRings && dead < 2; ++ring) {
+            d = d - d.dot(n) * n; // eq. 15: step along the tangent at the previous tip
+            if (!(d.norm() > 1e-12)) break;
+            d.normalize();
+            Vec3d next, nextNormal;
+            if (!dropOnSurface(f, s + l * d, next, nextNormal)) break;
+            s = next;
+            n = nextNormal;
+            axisTips[k].push_back(s);
+            addTip(lattice, ring * kAxis[k][0], ring * kAxis[k][1], s, n);
+            dead = alive(f, s, n) ? 0 : dead + 1;
+        }
+    }
+}
+
+// Fig. 7c: the tips between axes k and k + 1 on ring r interpolate the two r-th axis tips and
+// are dropped onto the surface along the field line. Returns the most rings either axis of a
+// pair reached (SpikePattern::rings).
+int fillRings(const TraceFrame& f, const std::vector<Vec3d> (&axisTips)[6], LatticeTips& lattice)
+{
+    int maxRings = 0;
+    for (int k = 0; k < 6; ++k) {
+        const int k1 = (k + 1) % 6;
+        const int rings = int(std::min(axisTips[k].size(), axisTips[k1].size())) - 1;
+        maxRings = std::max(maxRings, int(std::max(axisTips[k].size(), axisTips[k1].size())) - 1);
+        for (int ring = 2; ring <= rings; ++ring)
+            for (int step = 1; step < ring; ++step) {
+                const double t = double(step) / ring; // Fig. 7c: between the two n-th axis tips
+                const Vec3d x = (1 - t) * axisTips[k][size_t(ring)] + t * axisTips[k1][size_t(ring)];
+                Vec3d s, n;
+                if (!dropOnSurface(f, x, s, n)) continue;
+                addTip(lattice, ring * kAxis[k][0] + step * (kAxis[k1][0] - kAxis[k][0]),
+                       ring * kAxis[k][1] + step * (kAxis[k1][1] - kAxis[k][1]), s, n);
+            }
+    }
+    return maxRings;
+}
+
+// The tip's lattice map (eq. 13's coordinates): the inverse of the basis [b1 b2 l unit(b1 x b2)]
+// with b1, b2 the tip's steps to its (+1, 0) and (0, +1) neighbours (central differences where
+// both neighbours exist), top two rows. Returns a 2x3 matrix from an offset [m] to lattice units.
+Eigen::Matrix<double, 2, 3> tipLatticeMap(const TraceFrame& f, const LatticeTips& lattice, const Tip& tip)
+{
+    const double l = f.l;
+    const Vec3d e1 = f.e1, e1perp = f.e1perp, n0 = f.n0;
+    auto basis = [&](int di, int dj, const Vec3d& flat) {
+        Vec3d plus, minus;
+        const bool hasPlus = tipPosition(lattice, tip.i + di, tip.j + dj, plus);
+        const bool hasMinus = tipPosition(lattice, tip.i - di, tip.j - dj, minus);
+        if (hasPlus && hasMinus) return Vec3d(0.5 * (plus - minus));
+        if (hasPlus) return Vec3d(plus - tip.position);
+        if (hasMinus) return Vec3d(tip.position - minus);
+        return Vec3d(l * (flat - flat.dot(tip.normal) * tip.normal).normalized());
+    };
+    const Vec3d f1 = e1, f2 = 0.5 * e1 + std::sqrt(0.75) * e1perp;
+    auto frame = [&](const Vec3d& b1, const Vec3d& b2) {
+        Eigen::Matrix3d A;
+        A.col(0) = b1;
+        A.col(1) = b2;
+        const Vec3d c = b1.cross(b2);
+        A.col(2) = c.norm() > 0 ? Vec3d(c.normalized() * l) : Vec3d::Zero();
+        return A;
+    };
+    // Neighbours that (nearly) line up with the tip give b1 x b2 ~ 0 and no inverse:
+    // that tip takes the flat basis projected on its tangent plane, and where even
+    // that degenerates (a normal in the pattern's plane), the pattern's own frame.
+    const double minDet = 1e-9 * l * l * l;
+    Eigen::Matrix3d A = frame(basis(1, 0, f1), basis(0, 1, f2));
+    if (!(std::abs(A.determinant()) >= minDet) || !A.allFinite()) {
+        auto project = [&](const Vec3d& v) {
+            const Vec3d t = v - v.dot(tip.normal) * tip.normal;
+            return t.norm() > 1e-12 ? Vec3d(l * t.normalized()) : Vec3d::Zero();
+        };
+        A = frame(project(f1), project(f2));
+    }
+    if (!(std::abs(A.determinant()) >= minDet) || !A.allFinite()) {
+        A.col(0) = l * f1;
+        A.col(1) = l * f2;
+        A.col(2) = l * n0;
+    }
+    return A.inverse().topRows<2>();
+}
+
+} // namespace
+
+bool nearestFreeHit(const FreeSurface& surface, const Vec3d& p, const Vec3d& d, double maxDistance, Vec3d& hit,
+                    Vec3d& normal)
+{
+    for (const SurfaceRayCaster::Hit& h : surface.caster.lineHits(p, d)) {
+        if (std::abs(h.t) > maxDistance) break;
+        const auto& t = surface.mesh.triangles[h.triangle];
+        if (surface.wetted[t[0]] && surface.wetted[t[1]] && surface.wetted[t[2]]) continue;
+        hit = h.point;
+        normal = faceNormal(surface.mesh, h.triangle);
+        return true;
+    }
+    return false;
+}
+
+void traceLattice(Pattern& pat, const FreeSurface& surface, const SurfaceFields& fields, const SpikeParams& P,
+                  double Mc, double diagonal)
+{
+    const double l = pat.info.spacing;
+    const Vec3d n0 = pat.info.normal, e1 = pat.info.axis;
+    const TraceFrame frame{surface, fields, Mc, pat.info.origin, n0, e1, n0.cross(e1), l};
+    LatticeTips lattice;
+    std::vector<Vec3d> axisTips[6];
+    traceAxes(frame, int(std::ceil(diagonal / l)) + 1, lattice, axisTips);
+    pat.info.rings = fillRings(frame, axisTips, lattice);
+    for (Tip& tip : lattice.tips) tip.toLattice = tipLatticeMap(frame, lattice, tip);
+    pat.tips = std::move(lattice.tips);
+    // Eq. 14 at each tip: C0 = beta |H|, capped so the tip stands at most maxAspect l above
+    // the mean level, faded in from M_c; the spike grows along the tip's field.
+    for (Tip& tip : pat.tips) {
+        const Vec3d H = fields.field(tip.position, tip.normal);
+        tip.amplitude = std::min(P.beta * H.norm(), P.maxAspect * l / 3.0) *
+                        fields.magnetizationFade(fields.magnetization(tip.position, H));
+        tip.direction = growthDirection(H, tip.normal, P.maxTilt);
+    }
+    std::vector<Vec3d> positions;
+    for (const Tip& tip : pat.tips) positions.push_back(tip.position);
+    pat.grid = std::make_unique<PointGrid>(positions, l);
+}
+
+} // namespace ferro

@@ -1,0 +1,60 @@
+#pragma once
+// The hexagonal lattice of spike tips on the fluid surface (paper section 4.3, Fig. 7, eq. 15):
+// the free surface the tips are dropped onto, one pattern's tips, and the tracing that lays
+// them out from the pattern's origin. Phase 3 of addSpikes. Internal to ferro_spikes.
+#include "spikes/PointGrid.hpp"
+#include "spikes/SpikeMapper.hpp"
+#include "spikes/SurfaceFields.hpp"
+#include "spikes/SurfaceGeometry.hpp"
+
+#include <Eigen/Dense>
+
+#include <cstdint>
+#include <memory>
+#include <vector>
+
+namespace ferro {
+
+/// The free part of the input surface: triangles with at least one vertex that is not wetted
+/// wall. References; the mesh, its ray caster and the per-vertex wetted flags outlive it.
+struct FreeSurface {
+    const TriangleMesh& mesh;
+    const SurfaceRayCaster& caster;
+    const std::vector<char>& wetted; ///< per vertex of mesh: 1 = wetted wall
+};
+
+/// Where the line through p along d (non-zero) meets the free surface nearest to p, if no
+/// farther than maxDistance [m] from p: the point `hit` [m] and that triangle's unit normal.
+bool nearestFreeHit(const FreeSurface& surface, const Vec3d& p, const Vec3d& d, double maxDistance, Vec3d& hit,
+                    Vec3d& normal);
+
+/// One tip of a pattern on the undisplaced surface.
+struct Tip {
+    int i, j;                              // lattice coordinates (eq. 13's e1, e2 steps from x0)
+    Vec3d position, normal;                // on the surface [m], outward unit normal there
+    Eigen::Matrix<double, 2, 3> toLattice; // maps an offset from the tip [m] to lattice coordinates
+    double amplitude = 0;                  // C0 at the tip (eq. 14, capped) [m]
+    Vec3d direction{0, 0, 1};              // growth direction at the tip
+};
+
+/// One magnet's pattern: its public description (origin x0, normal, first axis e1, spacing l),
+/// its tips (after traceLattice) and a grid over their positions with cell l.
+struct Pattern {
+    SpikePattern info;
+    std::vector<Tip> tips;
+    std::unique_ptr<PointGrid> grid;
+};
+
+/// Phase 3, the tips of Fig. 7 for a pattern whose info (origin x0 and normal n0 on the free
+/// surface, axis e1, spacing l [m]) is set. From x0 the six lattice axes are traced along the
+/// surface with step l (eq. 15: each step along the tangent at the previous tip, the next tip
+/// where the field line through the stepped point meets the surface, within 0.75 l), for at
+/// most ceil(diagonal / l) + 1 rings [diagonal in m] and until two tips in a row are subcritical
+/// (|M| <= Mc [A/m]); tips between two axes interpolate the two n-th axis tips (Fig. 7c) and
+/// are dropped the same way. Fills pat.tips (each with its lattice map from its neighbours'
+/// positions, its amplitude C0 = min(beta |H|, maxAspect l / 3) times the magnetization fade,
+/// eq. 14, and its growth direction), pat.info.rings and pat.grid.
+void traceLattice(Pattern& pat, const FreeSurface& surface, const SurfaceFields& fields, const SpikeParams& P,
+                  double Mc, double diagonal);
+
+} // namespace ferro

@@ -1,0 +1,76 @@
+// The per-point evaluations of SurfaceFields.hpp.
+#include "spikes/SurfaceFields.hpp"
+
+#include "sim/core/Constants.hpp"
+#include "sim/magnetics/MagnetizationSolver.hpp"
+
+#include <cmath>
+
+namespace ferro {
+
+Vec3d growthDirection(const Vec3d& H, const Vec3d& n, double maxTilt)
+{
+    Vec3d dir = H.norm() > 0 ? Vec3d(H.normalized()) : n;
+    if (dir.dot(n) < 0) dir = -dir;
+    const double cosMax = std::cos(maxTilt * kPi / 180.0);
+    if (dir.dot(n) < cosMax) {
+        Vec3d tangent = dir - dir.dot(n) * n;
+        tangent = tangent.norm() > 0 ? Vec3d(tangent.normalized()) : Vec3d::Zero();
+        dir = cosMax * n + std::sqrt(std::max(0.0, 1 - cosMax * cosMax)) * tangent;
+    }
+    return dir;
+}
+
+SurfaceFields::SurfaceFields(const SpikeInput& in, const SpikeParams& p, double Mc) : in_(in), p_(p), Mc_(Mc)
+{
+    const SpikeParticles& particles = in.particles;
+    spacing_ = particles.spacing > 0 ? particles.spacing : in.fluid.particleSpacing;
+    if (!particles.magnetization.empty() && particles.magnetization.size() == particles.positions.size() &&
+        spacing_ > 0) {
+        radius_ = 2.0 * spacing_;
+        particleGrid_ = std::make_unique<PointGrid>(particles.positions, radius_);
+    }
+    wallMargin_ = p.wallMargin > 0 ? p.wallMargin : (spacing_ > 0 ? 1.5 * spacing_ : 2e-3);
+}
+
+Vec3d SurfaceFields::field(const Vec3d& x, const Vec3d& n) const
+{
+    Vec3d H = magnetField(in_.magnets, x);
+    if (in_.particleField) H += in_.particleField(x + 2.0 * spacing_ * n);
+    return H;
+}
+
+double SurfaceFields::magnetization(const Vec3d& x, const Vec3d& H) const
+{
+    if (particleGrid_) {
+        double sum = 0, weight = 0;
+        const double r2 = radius_ * radius_;
+        particleGrid_->forEachWithin(x, radius_, [&](uint32_t i, double d2) {
+            const double q = 1.0 - d2 / r2;
+            const double w = q * q * q;
+            sum += w * in_.particles.magnetization[i];
+            weight += w;
+        });
+        if (weight > 0) return sum / weight;
+    }
+    return langevinMagnetization(H.norm(), in_.fluid.law.susceptibility, in_.fluid.law.saturation);
+}
+
+double SurfaceFields::magnetizationFade(double M) const
+{
+    if (!(M > Mc_) || !std::isfinite(Mc_)) return 0.0;
+    return smoothstep01((M - Mc_) / (p_.magnetizationFade * std::max(Mc_, 1e-30)));
+}
+
+double SurfaceFields::magnetizationGate(double M) const
+{
+    if (!(M > Mc_) || !std::isfinite(Mc_)) return 0.0;
+    return smoothstep01((M - Mc_) / (0.05 * std::max(Mc_, 1e-30)));
+}
+
+bool SurfaceFields::wetted(const Vec3d& x) const
+{
+    return in_.fluid.container && !in_.fluid.container->contains(x, wallMargin_);
+}
+
+} // namespace ferro

@@ -1,0 +1,63 @@
+#pragma once
+// What addSpikes evaluates at a point of the fluid surface: the field H, the magnetization |M|,
+// the fades from the critical magnetization, the wetted wall, and the direction a spike grows.
+// Internal to ferro_spikes (SpikeMapper.cpp and the phase files beside it).
+#include "spikes/PointGrid.hpp"
+#include "spikes/SpikeMapper.hpp"
+
+#include <algorithm>
+#include <memory>
+
+namespace ferro {
+
+/// A float vertex as double.
+inline Vec3d toD(const Vec3& v) { return v.cast<double>(); }
+
+/// 0 below 0, 1 above 1, 3 x^2 - 2 x^3 between.
+inline double smoothstep01(double x)
+{
+    x = std::clamp(x, 0.0, 1.0);
+    return x * x * (3.0 - 2.0 * x);
+}
+
+/// The unit direction a spike grows in at a surface point with outward unit normal n: along the
+/// field H [A/m], turned outward, tilted at most maxTilt [deg] from n (n itself where H = 0).
+Vec3d growthDirection(const Vec3d& H, const Vec3d& n, double maxTilt);
+
+/// Everything evaluated per point of the surface; shared by the phases of addSpikes. Holds
+/// references to the input and parameters (they must outlive it); queries are thread-safe.
+class SurfaceFields {
+public:
+    /// Mc: the critical magnetization M_c of eq. 16 [A/m]. The particle spacing (from the
+    /// particles, else the fluid) sets the averaging radius of |M| (two spacings) and the
+    /// default wall margin (1.5 spacings, 2 mm if unknown).
+    SurfaceFields(const SpikeInput& in, const SpikeParams& p, double Mc);
+
+    /// H [A/m] at a surface point x with outward normal n: the magnets at x, the particles'
+    /// field a little above x (two particle spacings out along n), where the discrete particles
+    /// blur into the continuum they stand for (right at the surface a single particle's near
+    /// field would turn the spikes every which way).
+    Vec3d field(const Vec3d& x, const Vec3d& n) const;
+
+    /// |M| [A/m] at a surface point: the particles' M around it (a Shepard average with weight
+    /// (1 - d^2/r^2)^3, r = two particle spacings), else the fluid's law at the local field H.
+    double magnetization(const Vec3d& x, const Vec3d& H) const;
+
+    /// 0 at M_c, 1 from (1 + fade) M_c on, smooth: scales each spike's height (taken at its tip,
+    /// so a spike at the area's edge is lower but still a symmetric cone).
+    double magnetizationFade(double M) const;
+    /// 0 at M_c, 1 from 1.05 M_c on, smooth: cuts the surface exactly where |M| drops below M_c.
+    double magnetizationGate(double M) const;
+
+    /// True where x is closer than the wall margin to the container's walls (never spiky).
+    bool wetted(const Vec3d& x) const;
+
+private:
+    const SpikeInput& in_;
+    const SpikeParams& p_;
+    double Mc_;
+    double spacing_ = 0, radius_ = 0, wallMargin_ = 0;
+    std::unique_ptr<PointGrid> particleGrid_;
+};
+
+} // namespace ferro
