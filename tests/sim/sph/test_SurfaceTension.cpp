@@ -82,7 +82,7 @@ TEST_CASE("a free blob pulls itself into a sphere", "[sph][tension]") {
         const Droplet d = relaxDroplet(sigma, 0.007);
         CAPTURE(sigma, d.radiusOfGyrationRatio);
         // A solid sphere has r_gyr / R = sqrt(3/5) = 0.775; the start, a cylinder as high as
-        // it is wide, has (a^2 / 2 + h^2 / 12)^1/2 / (3 a^2 h / 4)^1/3 = 0.794.
+        // it is wide, has (a^2 / 2 + h^2 / 12)^1/2 / (3 a^2 h / 4)^1/3 = 0.797.
         REQUIRE(d.radiusOfGyrationRatio == Approx(std::sqrt(0.6)).epsilon(0.02));
     }
 }
