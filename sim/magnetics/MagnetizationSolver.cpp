@@ -1,4 +1,5 @@
 #include "sim/magnetics/MagnetizationSolver.hpp"
+#include "sim/magnetics/Gmres.hpp"
 
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
@@ -70,82 +71,6 @@ namespace {
 
 using Clock = std::chrono::steady_clock;
 using VecX = Eigen::VectorXd;
-
-// Restarted GMRES(m) for Op x = b from x = 0, stopping when |b - Op x| <= absTol or after
-// maxApply operator applications. Restarts compute the residual from the Arnoldi relation
-// (Op V_m = V_{m+1} Hbar), so an application is spent only on new Krylov vectors.
-template <class Op>
-int gmres(Op&& op, const VecX& b, VecX& x, double absTol, int maxApply, int restart, double& resNorm) {
-    const Eigen::Index n = b.size();
-    x.setZero(n);
-    VecX r = b;
-    double beta = r.norm();
-    resNorm = beta;
-    int applied = 0;
-    std::vector<VecX> V;
-    while (beta > absTol && applied < maxApply) {
-        const int m = std::min(restart, maxApply - applied);
-        V.assign(1, r / beta);
-        Eigen::MatrixXd Hh = Eigen::MatrixXd::Zero(m + 1, m);
-        VecX cs = VecX::Zero(m), sn = VecX::Zero(m), g = VecX::Zero(m + 1);
-        g[0] = beta;
-        int k = 0;
-        double est = beta;
-        for (; k < m && est > absTol; ++k) {
-            VecX w = op(V[k]);
-            ++applied;
-            for (int i = 0; i <= k; ++i) { // modified Gram-Schmidt
-                Hh(i, k) = w.dot(V[i]);
-                w -= Hh(i, k) * V[i];
-            }
-            Hh(k + 1, k) = w.norm();
-            const bool breakdown = !(Hh(k + 1, k) > 1e-300);
-            V.push_back(breakdown ? VecX(VecX::Zero(n)) : VecX(w / Hh(k + 1, k)));
-            // apply the previous rotations to the new column, then a new one
-            Eigen::VectorXd col = Hh.col(k);
-            for (int i = 0; i < k; ++i) {
-                const double t = cs[i] * col[i] + sn[i] * col[i + 1];
-                col[i + 1] = -sn[i] * col[i] + cs[i] * col[i + 1];
-                col[i] = t;
-            }
-            const double den = std::hypot(col[k], col[k + 1]);
-            cs[k] = den > 0 ? col[k] / den : 1.0;
-            sn[k] = den > 0 ? col[k + 1] / den : 0.0;
-            col[k] = den;
-            col[k + 1] = 0;
-            for (int i = 0; i <= k + 1; ++i) Hh(i, k) = col[i]; // rotated (upper-triangular) storage
-            g[k + 1] = -sn[k] * g[k];
-            g[k] = cs[k] * g[k];
-            est = std::abs(g[k + 1]);
-            if (breakdown) {
-                ++k;
-                break;
-            }
-        }
-        // y = R^-1 g (R = rotated Hh, upper triangular k x k)
-        VecX y = VecX::Zero(k);
-        for (int i = k - 1; i >= 0; --i) {
-            double s = g[i];
-            for (int j = i + 1; j < k; ++j) s -= Hh(i, j) * y[j];
-            y[i] = Hh(i, i) != 0 ? s / Hh(i, i) : 0.0;
-        }
-        for (int i = 0; i < k; ++i) x += y[i] * V[i];
-        // Residual of the rotated least-squares problem: Q^T (0,...,0,g_k) in the V basis.
-        VecX e = VecX::Zero(k + 1);
-        e[k] = g[k];
-        for (int i = k - 1; i >= 0; --i) { // undo the rotations
-            const double t = cs[i] * e[i] - sn[i] * e[i + 1];
-            e[i + 1] = sn[i] * e[i] + cs[i] * e[i + 1];
-            e[i] = t;
-        }
-        r.setZero(n);
-        for (int i = 0; i <= k; ++i) r += e[i] * V[i];
-        beta = r.norm();
-        resNorm = beta;
-        if (k == 0) break;
-    }
-    return applied;
-}
 
 // The Jacobian of M(H) at H: s I + (t - s) h h^T (s secant, t slope, h = H / |H|).
 struct LocalSusceptibility {

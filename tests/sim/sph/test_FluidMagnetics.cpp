@@ -133,13 +133,89 @@ TEST_CASE("a uniform applied field exerts no Kelvin force, and a non-magnetic fl
     REQUIRE(still.magnetics()->field()[0].norm() > 0);
 }
 
-TEST_CASE("a blob falling onto a bare magnet pole stays finite", "[magnetics]") {
+namespace {
+
+/// Phi(H) = integral_0^H M(H') dH' of the Langevin law M = Ms L(3 chi0 H / Ms):
+/// (Ms^2 / (3 chi0)) ln(sinh(xi) / xi), xi = 3 chi0 H / Ms. With the external solver the
+/// Kelvin force per volume, mu0 (M . grad) H = mu0 grad Phi(|H|) (M parallel to a curl-free
+/// H), is the gradient of the potential energy -mu0 Phi(|H|) per volume.
+double langevinEnergy(double H, double chi0, double Ms) {
+    const double xi = 3 * chi0 * H / Ms;
+    const double lnSinhOverXi = xi < 1e-4 ? xi * xi / 6 : xi < 30 ? std::log(std::sinh(xi) / xi)
+                                                                  : xi - std::log(2 * xi);
+    return Ms * Ms / (3 * chi0) * lnSinhOverXi;
+}
+
+} // namespace
+
+TEST_CASE("a blob falling onto a bare magnet pole: finite, pulled toward it, kinetic energy within the magnetic energy released", "[magnetics]") {
     // No container, no gravity: the fluid is pulled onto the dipole itself, whose field
     // is singular there. The simulation regularizes it over one particle spacing.
+    const double chi0 = 2, Ms = 30000, rho0 = 1200;
+    const Vec3d pole(0, 0, -0.005);
     FluidSimulation sim(blobScene("[[magnets]]\nkind = \"dipole\"\nposition = [0, 0, -0.005]\nmoment = 0.5\n",
                                   "[magnetization]\nsusceptibility = 2\nsaturation = 30000\nsolver = \"external\"\n"));
-    sim.advanceTo(0.1);
-    REQUIRE(allFinite(sim));
+    const size_t n = sim.size();
+    const double V = sim.particleVolume();
+    const std::vector<Magnet> magnets = sim.magnetsNow(); // softened as the particles feel them
+    auto state = [&](Vec3d& com, double& potential, double& farthest) {
+        com.setZero();
+        potential = 0;
+        farthest = 0;
+        for (size_t i = 0; i < n; ++i) {
+            const Vec3d x = sim.positions()[i].cast<double>();
+            com += x / double(n);
+            farthest = std::max(farthest, (x - pole).norm());
+            potential -= kMu0 * V * langevinEnergy(magnetField(magnets, x).norm(), chi0, Ms);
+        }
+    };
+    Vec3d com0, com1;
+    double u0, u1, far0, far1;
+    state(com0, u0, far0);
+    // Internal forces cancel: the centre of mass accelerates with the mean Kelvin
+    // acceleration (mu0 / rho0) grad Phi(|H|), which only grows as the blob (all of it above
+    // the pole) comes closer; so after t it has fallen at least a0 t^2 / 2.
+    double a0 = 0;
+    for (size_t i = 0; i < n; ++i) {
+        const Vec3d x = sim.positions()[i].cast<double>(), e(0, 0, 1e-7);
+        a0 += kMu0 / rho0 * (langevinEnergy(magnetField(magnets, x + e).norm(), chi0, Ms) -
+                             langevinEnergy(magnetField(magnets, x - e).norm(), chi0, Ms)) / 2e-7 / double(n);
+    }
+    REQUIRE(a0 < 0); // down, toward the pole
+    const double tFall = std::sqrt(2 * (com0.z() - pole.z()) / -a0); // 40 ms
+    double lastZ = com0.z();
+    double kinetic = 0, vmax = 0, released = 0;
+    for (int k = 1; k <= 10; ++k) {
+        sim.advanceTo(0.01 * k);
+        REQUIRE(allFinite(sim));
+        state(com1, u1, far1);
+        kinetic = 0;
+        vmax = 0;
+        for (const Vec3& v : sim.velocities()) {
+            kinetic += 0.5 * rho0 * V * v.squaredNorm();
+            vmax = std::max(vmax, double(v.norm()));
+        }
+        released = u0 - u1;
+        CAPTURE(k, kinetic, released, vmax, com1.transpose(), far1);
+        // Energy: the Kelvin force is conservative, pressure and viscosity only store or
+        // dissipate: the kinetic energy never exceeds the magnetic energy released.
+        REQUIRE(released > 0);
+        REQUIRE(kinetic <= released);
+        // No particle is faster than one that took all the released energy for itself ...
+        REQUIRE(0.5 * rho0 * V * vmax * vmax <= released);
+        // ... so none gets farther from the pole than it started plus that speed times t.
+        REQUIRE(far1 <= far0 + std::sqrt(2 * released / (rho0 * V)) * sim.time());
+        if (k == 1) {
+            CAPTURE(a0, com0.z() - com1.z(), -0.5 * a0 * sim.time() * sim.time());
+            REQUIRE(com0.z() - com1.z() >= -0.5 * a0 * sim.time() * sim.time());
+        }
+        // It keeps falling at least until it could have reached the pole with a0 alone.
+        if (sim.time() <= tFall) REQUIRE(com1.z() < lastZ);
+        lastZ = com1.z();
+    }
+    // Not asserted: after the blob has passed through the pole (t ~ 50 ms) it splashes
+    // apart: at 0.1 s 112 of its 180 particles are farther from the pole than any was at the
+    // start, the fastest at 7.1 m/s (within the energy released, so allowed above).
 }
 
 TEST_CASE("a scene without magnets builds no magnetics at all", "[magnetics]") {
