@@ -161,7 +161,7 @@ TEST_CASE("ferro-spikes: bad input is one line and exit code 2", "[spikes][cli]"
                     scene + " --frames 0:1 --out '" + (dir / "o_{:04}.ply").string() + "'",
                 err, dir) == 2);
     oneLine(err);
-    REQUIRE(err.find("particle pattern") != std::string::npos);
+    REQUIRE(err.find("--particles: a frame range needs a {:04} or %04d placeholder") != std::string::npos);
     // Particles with a NaN position.
     {
         ParticleTable t;

@@ -194,9 +194,12 @@ TEST_CASE("ferro-surface: bad input is a one-line error with exit 2, missing fil
     }
     CHECK(run("'" + (s / "p.ply") + "' --frames 0:1 --out '" + (s / "fixed.ply") + "'", s, &err) == 2);
     CHECK(err.find("placeholder") != std::string::npos);
-    CHECK(run("'" + (s / "p.ply") + "' --out '" + (s / "m.xyzformat") + "'", s, &err) == 4);
+    // An unknown output format is a bad option (2), like every stage's (sim/core/ExitCodes.hpp).
+    CHECK(run("'" + (s / "p.ply") + "' --out '" + (s / "m.xyzformat") + "'", s, &err) == 2);
+    CHECK(err.find("unknown mesh format 'xyzformat'") != std::string::npos);
     CHECK(run("--no-such-flag", s, &err) == 2);
-    // A range with one missing frame: the others are still written, the exit code says I/O.
+    // A range with one missing frame: the run stops there (sim/core/FrameRunner.hpp), the exit
+    // code says I/O and the line names the missing file.
     CHECK(run("'" + (s / "r_{:04}.ply") + "' --frames 0:1 --out '" + (s / "rm_{:04}.ply") + "' -q", s, &err) == 4);
 }
 
