@@ -5,6 +5,7 @@
 // Header-only; include as "tests/TestUtil.hpp" (the project root is on the include path).
 #include <algorithm>
 #include <atomic>
+#include <cmath>
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
@@ -17,6 +18,18 @@
 #include <unistd.h>
 
 namespace ferro::test {
+
+/// Relative RMS difference of two sets of vectors (Eigen, any scalar): |a - ref| / |ref|,
+/// 2-norms over all of them, summed in double.
+template <class V>
+double relativeRms(const std::vector<V>& a, const std::vector<V>& ref) {
+    double d = 0, r = 0;
+    for (size_t i = 0; i < ref.size(); ++i) {
+        d += (a[i] - ref[i]).template cast<double>().squaredNorm();
+        r += ref[i].template cast<double>().squaredNorm();
+    }
+    return std::sqrt(d / r);
+}
 
 /// Every byte of the file at `path`; empty when it cannot be opened.
 inline std::string slurp(const std::filesystem::path& path) {

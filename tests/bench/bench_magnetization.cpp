@@ -18,6 +18,7 @@
 // approximation error at its own solution, plus its residual), not against a direct solve.
 #include "sim/magnetics/MagnetizationSolver.hpp"
 #include "sim/core/Constants.hpp"
+#include "tests/TestUtil.hpp"
 
 #include <tbb/global_control.h>
 
@@ -64,15 +65,6 @@ void dishLayer(size_t count, std::vector<Vec3>& x, std::vector<Real>& V) {
         x.push_back(all[i].p.cast<Real>());
         V.push_back(Real(s * s * s));
     }
-}
-
-double relRms(const std::vector<Vec3>& a, const std::vector<Vec3>& ref) {
-    double d = 0, r = 0;
-    for (size_t i = 0; i < ref.size(); ++i) {
-        d += (a[i] - ref[i]).cast<double>().squaredNorm();
-        r += ref[i].cast<double>().squaredNorm();
-    }
-    return std::sqrt(d / r);
 }
 
 const char* name(Solver s) {
@@ -159,8 +151,8 @@ int main(int argc, char** argv) {
             const double ms = 1e3 * st.seconds;
             char errH[32] = "-", errM[32] = "-", speed[32] = "-";
             if (haveDirect) {
-                std::snprintf(errH, sizeof errH, "%.2e", relRms(H, Hd));
-                std::snprintf(errM, sizeof errM, "%.2e", relRms(M, Md));
+                std::snprintf(errH, sizeof errH, "%.2e", ferro::test::relativeRms(H, Hd));
+                std::snprintf(errM, sizeof errM, "%.2e", ferro::test::relativeRms(M, Md));
                 std::snprintf(speed, sizeof speed, "%.1f", directMs / ms);
             } else if (kind == Solver::Tree) {
                 // Direct estimated on a subset of targets (see the file comment).

@@ -141,7 +141,7 @@ TEST_CASE("frameRangeArgument parses ranges and names the option in its errors",
     }
 }
 
-TEST_CASE("--set collects every override in order; --threads takes N >= 0", "[cli]") {
+TEST_CASE("the --set option collects every override in order, --threads takes N >= 0", "[cli]") {
     CLI::App app{"ferro-test"};
     std::vector<std::string> overrides;
     int threads = 0;

@@ -3,6 +3,7 @@
 // far fields and regularization.
 #include "sim/magnetics/MagnetizationSolver.hpp"
 #include "sim/core/Constants.hpp"
+#include "tests/TestUtil.hpp"
 
 #include <catch2/catch.hpp>
 
@@ -74,16 +75,6 @@ MagnetizationParams params(Solver solver, double chi, double Ms = 0, double tol 
     p.tolerance = tol;
     p.maxIterations = 100;
     return p;
-}
-
-// Relative RMS difference of two field sets.
-double relRms(const std::vector<Vec3>& a, const std::vector<Vec3>& ref) {
-    double d = 0, r = 0;
-    for (size_t i = 0; i < ref.size(); ++i) {
-        d += (a[i] - ref[i]).cast<double>().squaredNorm();
-        r += ref[i].cast<double>().squaredNorm();
-    }
-    return std::sqrt(d / r);
 }
 
 bool allFinite(const std::vector<Vec3>& v) {
@@ -221,14 +212,14 @@ TEST_CASE("Tree agrees with direct on a 10k-particle layer over a dipole", "[mag
         // the particle field matters here: the external field alone is far off
         std::vector<Vec3> Hext(x.size());
         for (size_t i = 0; i < x.size(); ++i) Hext[i] = magnetField(magnets, x[i].cast<double>()).cast<Real>();
-        const double extErr = relRms(Hext, Hd);
-        const double err = relRms(Ht, Hd), errM = relRms(Mt, Md);
+        const double extErr = ferro::test::relativeRms(Hext, Hd);
+        const double err = ferro::test::relativeRms(Ht, Hd), errM = ferro::test::relativeRms(Mt, Md);
         std::vector<Vec3> indT(x.size()), indD(x.size());
         for (size_t i = 0; i < x.size(); ++i) {
             indT[i] = Ht[i] - Hext[i];
             indD[i] = Hd[i] - Hext[i];
         }
-        const double errInduced = relRms(indT, indD);
+        const double errInduced = ferro::test::relativeRms(indT, indD);
         INFO("Ms " << Ms << ": tree error " << err << " (M " << errM << ", particle field alone " << errInduced
                    << "), estimate " << st.fieldError << ", external error " << extErr);
         REQUIRE(extErr > 0.1);
@@ -253,7 +244,7 @@ TEST_CASE("External and direct coincide as chi -> 0", "[magnetization]") {
         const auto se = ext.solve(x, V, magnets, He, Me);
         dir.solve(x, V, magnets, Hd, Md);
         REQUIRE(se.iterations == 0);
-        const double diff = relRms(He, Hd);
+        const double diff = ferro::test::relativeRms(He, Hd);
         INFO("chi " << chi << ": relative difference " << diff << ", estimate " << se.fieldError);
         REQUIRE(diff < chi);        // first order in chi
         REQUIRE(diff > 0.01 * chi); // and not zero: the particle field is there
@@ -283,8 +274,8 @@ TEST_CASE("Linear magnetization superposes and scales", "[magnetization]") {
             sum[i] = Ma[i] + Mb[i];
             scaled[i] = -2 * Ma[i];
         }
-        REQUIRE(relRms(sum, Mab) < 1e-4);
-        REQUIRE(relRms(scaled, M2) < 1e-4);
+        REQUIRE(ferro::test::relativeRms(sum, Mab) < 1e-4);
+        REQUIRE(ferro::test::relativeRms(scaled, M2) < 1e-4);
     }
 }
 
@@ -435,7 +426,7 @@ TEST_CASE("Warm start cuts the work of the next solve", "[magnetization]") {
         const auto warm = solver.solve(x2, V, {dipoleBelow(-0.0119, 1.0)}, H, M);
         INFO("cold " << cold.iterations << " cold again " << again.iterations << " warm " << warm.iterations);
         REQUIRE(warm.iterations < again.iterations);
-        REQUIRE(relRms(H, Hc) < 2e-3);
+        REQUIRE(ferro::test::relativeRms(H, Hc) < 2e-3);
         // an already converged state costs one evaluation
         const auto done = solver.solve(x2, V, {dipoleBelow(-0.0119, 1.0)}, H, M);
         REQUIRE(done.iterations == 1);
