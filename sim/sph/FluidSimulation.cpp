@@ -596,18 +596,6 @@ void FluidSimulation::pressureAccelerations(const std::vector<Real>& kappa) {
     });
 }
 
-Real FluidSimulation::divergence(size_t i, const std::vector<Vec3>& u) const {
-    // sum_j V (u_i - u_j) . grad W_ij + sum_b V_b u_i . grad W_ib (walls are at rest).
-    const Vec3 ui = u[i];
-    Real sum = 0;
-    for (uint32_t k = fluidNbr_.begin(i); k < fluidNbr_.end(i); ++k)
-        sum += (ui - u[fluidNbr_.index[k]]).dot(fluidNbr_.gradW[k]);
-    sum *= Real(volume_);
-    for (uint32_t k = boundaryNbr_.begin(i); k < boundaryNbr_.end(i); ++k)
-        sum += bVolume_[boundaryNbr_.index[k]] * ui.dot(boundaryNbr_.gradW[k]);
-    return sum;
-}
-
 void FluidSimulation::integratePositions(double dt) {
     const size_t n = x_.size();
     xOld_ = x_;
