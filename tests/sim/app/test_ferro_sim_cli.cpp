@@ -79,6 +79,9 @@ TEST_CASE("ferro-sim rejects bad input with one line and exit code 2", "[cli]") 
         {"--set shot.fps=fast", "shot.fps"},
         {"--resume --overwrite", "--resume excludes --overwrite"},
         {"--max-frames -3", "--max-frames"},
+        // Issue 15: these overflowed frameCount ("frames to -2147483648") and exited 0.
+        {"--set shot.duration=1e9", "shot.duration: duration * fps makes"},
+        {"--set shot.fps=1e30", "shot.fps: duration * fps makes"},
     };
     for (const Case& c : cases) {
         const CommandResult r = run(kSim + " " + example("dam_break.toml") + " --out " + dir.string() + " " + c.args);

@@ -324,6 +324,24 @@ TEST_CASE("range violations are errors", "[scene]")
     CHECK_NOTHROW(scene("[fluid]\nspacing = 0.01\n[[fluid.block]]\nmin = [0,0,0]\nmax = [1,1,1]\n"));
 }
 
+TEST_CASE("a shot longer than kMaxFrame frames is refused, naming the key set (issue 15)", "[scene]")
+{
+    // duration * fps used to overflow ShotParams::frameCount's int: "frames to -2147483648".
+    CHECK_THAT(sceneError(kMinimal, {"shot.duration=1e9"}),
+               Contains("--set shot.duration:1: shot.duration: duration * fps makes 3e+10 frames, more than 9999999 "
+                        "(got duration 1e+09 s, fps 30)"));
+    CHECK_THAT(sceneError(kMinimal, {"shot.fps=1e30"}), Contains("--set shot.fps:1: shot.fps: duration * fps makes 1e+30 frames"));
+    CHECK_THAT(sceneError(kMinimal + "[shot]\nfps = 1000\nduration = 10000\n"), Contains("t.toml:8: shot.duration:"));
+    // The largest shot that fits is accepted.
+    CHECK(scene(kMinimal, {"shot.fps=1", "shot.duration=9999999"}).shot.frameCount() == 9999999);
+    // frameCount never overflows, even for fields set in code.
+    ShotParams p;
+    p.duration = 1e9;
+    CHECK(p.frameCount() == 9999999);
+    p.fps = std::nan("");
+    CHECK(p.frameCount() == 0);
+}
+
 TEST_CASE("boxes need max > min on every axis", "[scene]")
 {
     std::string msg = sceneError("[fluid]\n[[fluid.block]]\nmin = [0, 0, 0]\nmax = [1, -1, 1]\ncount = 5\n");
