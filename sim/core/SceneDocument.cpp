@@ -292,7 +292,7 @@ double TableReader::number(const std::string& key) const
         fail(key, std::string("expected a number (got ") + typeName(*n) + ")");
     // TOML allows nan and inf; no physical parameter of a shot can be either.
     if (!std::isfinite(v))
-        fail(key, "expected a finite number (got " + formatNumber(v) + ")");
+        fail(key, "must be finite (got " + formatNumber(v) + ")");
     return v;
 }
 
@@ -421,9 +421,11 @@ Vec3d TableReader::vec3(const std::string& key) const
         else
             fail(key, std::string("expected an array of 3 numbers (element ") + std::to_string(i) +
                           " is a " + typeName(e) + ")");
-        if (!std::isfinite(v[Eigen::Index(i)]))
-            fail(key, "expected finite numbers (got " + formatVec(v) + ")");
     }
+    // Checked once all three are read: the message shows the values given, never the
+    // uninitialised elements after a nan.
+    if (!v.allFinite())
+        fail(key, "must be finite (got " + formatVec(v) + ")");
     return v;
 }
 

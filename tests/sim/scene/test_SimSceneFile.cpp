@@ -278,7 +278,7 @@ TEST_CASE("wrong types are errors", "[scene]")
     CHECK_THAT(sceneError(kMinimal + "[container]\ntype = 3\n"),
                Contains("t.toml:7: container.type: expected a string (got integer)"));
     CHECK_THAT(sceneError("fluid = 3\n"), Contains("t.toml:1: fluid: expected a table"));
-    CHECK_THAT(sceneError("[fluid]\nspacing = nan\n"), Contains("t.toml:2: fluid.spacing: expected a finite number"));
+    CHECK_THAT(sceneError("[fluid]\nspacing = nan\n"), Contains("t.toml:2: fluid.spacing: must be finite (got nan)"));
 }
 
 TEST_CASE("missing required keys name the table's line", "[scene]")
@@ -340,6 +340,27 @@ TEST_CASE("a shot longer than kMaxFrame frames is refused, naming the key set (i
     CHECK(p.frameCount() == 9999999);
     p.fps = std::nan("");
     CHECK(p.frameCount() == 0);
+}
+
+TEST_CASE("non-finite numbers are refused by every numeric getter, showing the values given (issue 15)", "[scene]")
+{
+    // vec3 used to fail on the first nan with the later elements uninitialised:
+    // "got [nan, 4e-323, 1.14e+243]".
+    CHECK(sceneError(kMinimal + "[sim]\ngravity = [nan, 0, 0]\n") ==
+          "t.toml:7: sim.gravity: must be finite (got [nan, 0, 0])");
+    CHECK(sceneError("[fluid]\n[[fluid.block]]\nshape = \"cylinder\"\nradius = 1\nheight = 1\ncount = 5\n",
+                     {"fluid.block.0.center=[nan,0,0]"}) ==
+          "--set fluid.block.0.center:1: fluid.block[0].center: must be finite (got [nan, 0, 0])");
+    CHECK(sceneError(kMinimal + "[sim]\ngravity = [1, 2, -inf]\n") ==
+          "t.toml:7: sim.gravity: must be finite (got [1, 2, -inf])");
+    // box, unitVector, number, positive, nonNegative.
+    CHECK(sceneError("[fluid]\n[[fluid.block]]\nmin = [0, inf, 0]\nmax = [1, 1, 1]\ncount = 5\n") ==
+          "t.toml:3: fluid.block[0].min: must be finite (got [0, inf, 0])");
+    CHECK(sceneError(kMinimal + "[[magnets]]\ndirection = [0, nan, 1]\n") ==
+          "t.toml:7: magnets[0].direction: must be finite (got [0, nan, 1])");
+    CHECK(sceneError(kMinimal + "[sim]\ncfl = nan\n") == "t.toml:7: sim.cfl: must be finite (got nan)");
+    CHECK(sceneError(kMinimal + "[sim]\nmax_dt = inf\n") == "t.toml:7: sim.max_dt: must be finite (got inf)");
+    CHECK(sceneError("[fluid]\nviscosity = -inf\n") == "t.toml:2: fluid.viscosity: must be finite (got -inf)");
 }
 
 TEST_CASE("boxes need max > min on every axis", "[scene]")
