@@ -354,9 +354,13 @@ int TableReader::integerInRange(const std::string& key, int def, long lo, long h
 Vec3d TableReader::unitVector(const std::string& key, const Vec3d& def) const
 {
     const Vec3d d = vec3(key, def);
-    if (!(d.norm() > 0))
+    // Scaled by its largest component first: the norm of [1e308, 1e308, 0] overflows and
+    // that of [1e-200, 0, 0] underflows, and either normalized to a zero vector that the
+    // next reader of this default (a magnet key) then blamed on a key nobody set.
+    const double big = d.cwiseAbs().maxCoeff();
+    if (!(big > 0))
         fail(key, "must be a non-zero vector (got " + formatVec(d) + ")");
-    return d.normalized();
+    return (d / big).normalized();
 }
 
 void TableReader::box(const std::string& minKey, const std::string& maxKey, Vec3d& lo, Vec3d& hi) const

@@ -5,6 +5,7 @@
 
 #include <catch2/catch.hpp>
 
+#include <cmath>
 #include <filesystem>
 #include <functional>
 
@@ -361,6 +362,28 @@ TEST_CASE("non-finite numbers are refused by every numeric getter, showing the v
     CHECK(sceneError(kMinimal + "[sim]\ncfl = nan\n") == "t.toml:7: sim.cfl: must be finite (got nan)");
     CHECK(sceneError(kMinimal + "[sim]\nmax_dt = inf\n") == "t.toml:7: sim.max_dt: must be finite (got inf)");
     CHECK(sceneError("[fluid]\nviscosity = -inf\n") == "t.toml:2: fluid.viscosity: must be finite (got -inf)");
+}
+
+TEST_CASE("a huge or tiny direction is normalized, and errors name the key the user set (issue 15)", "[scene]")
+{
+    // The norm of [1e308, 1e308, 0] overflowed: the magnet's direction became [0, 0, 0]
+    // and the error blamed magnets[0].keys[0].direction, a key not set.
+    const std::string keyed = kMinimal + "[[magnets]]\nmoment = 1\n[[magnets.keys]]\ntime = 0\n";
+    const double r = std::sqrt(0.5);
+    for (const char* set : {"magnets.0.direction=[1e308,1e308,0]", "magnets.0.direction=[1e-200,1e-200,0]",
+                            "magnets.0.direction=[5e-324,5e-324,0]"}) {
+        CAPTURE(set);
+        const SimScene s = scene(keyed, {set});
+        REQUIRE(s.magnets.size() == 1);
+        CHECK(s.magnets[0].base.direction.isApprox(Vec3d(r, r, 0)));
+        REQUIRE(s.magnets[0].keys.size() == 1);
+        CHECK(s.magnets[0].keys[0].direction.isApprox(Vec3d(r, r, 0)));
+    }
+    CHECK(sceneError(keyed, {"magnets.0.direction=[0,0,0]"}) ==
+          "--set magnets.0.direction:1: magnets[0].direction: must be a non-zero vector (got [0, 0, 0])");
+    CHECK(sceneError(keyed, {"magnets.0.keys.0.direction=[0,0,0]"}) ==
+          "--set magnets.0.keys.0.direction:1: magnets[0].keys[0].direction: must be a non-zero vector (got [0, 0, 0])");
+    CHECK(scene(keyed, {"magnets.0.keys.0.direction=[0,-1e308,-1e308]"}).magnets[0].keys[0].direction.isApprox(Vec3d(0, -r, -r)));
 }
 
 TEST_CASE("boxes need max > min on every axis", "[scene]")
