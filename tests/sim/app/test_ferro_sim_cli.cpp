@@ -6,6 +6,7 @@
 #include <catch2/catch.hpp>
 
 #include <chrono>
+#include <cmath>
 #include <csignal>
 #include <cstdio>
 #include <filesystem>
@@ -94,6 +95,66 @@ TEST_CASE("ferro-sim rejects bad input with one line and exit code 2", "[cli]") 
     REQUIRE(missing.code == 2);
     REQUIRE(lines(missing.output) == 1);
     fs::remove_all(dir);
+}
+
+TEST_CASE("magnet strengths: beyond the limit exit 2, at the limit the written frames stay finite (issue 15)", "[cli]") {
+    // A 2 cm dish, 500 particles, one magnet of each kind at its kind's largest accepted
+    // strength (MagnetKinds.hpp). field = 1e20 used to write NaN H with exit 0.
+    const TempDir tmp("magnet_limits");
+    // fps 3000: frame 1 is a few steps after frame 0, so each run takes well under a second.
+    const std::string fluid = R"([shot]
+fps = 3000
+[fluid]
+rest_density = 1200.0
+[[fluid.block]]
+shape = "cylinder"
+radius = 0.01
+height = 0.004
+count = 500
+[container]
+type = "dish"
+radius = 0.01
+height = 0.01
+[magnetization]
+susceptibility = 1.0
+saturation = 30000.0
+[[magnets]]
+)";
+    struct Case {
+        std::string magnet, key;
+    };
+    const std::vector<Case> cases = {
+        {"kind = \"uniform\"\nfield = 1e9\n", "field=1e20"},
+        {"kind = \"dipole\"\nposition = [0, 0, -0.005]\nmoment = 1e6\n", "moment=1e36"},
+        {"kind = \"bar\"\nposition = [0, 0, -0.015]\nlength = 0.02\npole_strength = -1e6\n", "pole_strength=1e7"},
+        {"kind = \"loop\"\nposition = [0, 0, -0.005]\nradius = 0.005\ncurrent = 1e9\n", "current=2e9"},
+    };
+    for (const Case& c : cases) {
+        const std::string scene = tmp.write("s.toml", fluid + c.magnet);
+        const std::string out = tmp.file("out");
+        fs::remove_all(out);
+        const CommandResult bad = run(kSim + " " + scene + " --out " + out + " --quiet --max-frames 1 --set magnets.0." + c.key);
+        CAPTURE(c.magnet, bad.output);
+        REQUIRE(bad.code == 2);
+        REQUIRE(lines(bad.output) == 1);
+        REQUIRE(bad.output.find("magnets[0]." + c.key.substr(0, c.key.find('=')) + ": must be within") != std::string::npos);
+        REQUIRE(!fs::exists(frame(out, 0)));
+
+        // The largest accepted strength: runs, or stops with the sanity guard's one line and
+        // exit 3; every frame it wrote holds finite values only.
+        const CommandResult r = run(kSim + " " + scene + " --out " + out + " --quiet --max-frames 1 --threads 2");
+        CAPTURE(r.output);
+        REQUIRE((r.code == 0 || (r.code == 3 && lines(r.output) == 1)));
+        REQUIRE(fs::exists(frame(out, 0)));
+        for (int f = 0; f <= 1 && fs::exists(frame(out, f)); ++f) {
+            const ParticleTable t = readParticleFile(frame(out, f));
+            REQUIRE(t.rows() == 500);
+            size_t nonFinite = 0;
+            for (float v : t.values) nonFinite += !std::isfinite(v);
+            CAPTURE(f);
+            REQUIRE(nonFinite == 0);
+        }
+    }
 }
 
 TEST_CASE("a blow-up stops with a clear message and keeps the frames written", "[cli]") {

@@ -386,6 +386,25 @@ TEST_CASE("a huge or tiny direction is normalized, and errors name the key the u
     CHECK(scene(keyed, {"magnets.0.keys.0.direction=[0,-1e308,-1e308]"}).magnets[0].keys[0].direction.isApprox(Vec3d(0, -r, -r)));
 }
 
+TEST_CASE("magnet strengths beyond the kind's maxStrength are refused, naming the key (issue 15)", "[scene]")
+{
+    // field = 1e20 A/m made every particle's H NaN (H^2 overflows a float); moment = 1e36 gave inf.
+    const std::string uniform = kMinimal + "[[magnets]]\nkind = \"uniform\"\nfield = 1\n[[magnets.keys]]\ntime = 0\n";
+    CHECK(sceneError(uniform, {"magnets.0.field=1e20"}) ==
+          "--set magnets.0.field:1: magnets[0].field: must be within +-1e+09 A/m for a uniform magnet (got 1e+20; "
+          "stronger fields overflow the solver's floats)");
+    CHECK_THAT(sceneError(uniform, {"magnets.0.keys.0.field=-2e9"}),
+               Contains("--set magnets.0.keys.0.field:1: magnets[0].keys[0].field: must be within +-1e+09 A/m"));
+    CHECK(scene(uniform, {"magnets.0.field=-1e9"}).magnets[0].base.strength == -1e9);
+    CHECK_THAT(sceneError(kMinimal + "[[magnets]]\nmoment = 1e36\n"),
+               Contains("t.toml:7: magnets[0].moment: must be within +-1e+06 A m^2 for a dipole magnet (got 1e+36;"));
+    CHECK_THAT(sceneError(kMinimal + "[[magnets]]\nkind = \"bar\"\nlength = 0.01\npole_strength = 2e6\n"),
+               Contains("t.toml:9: magnets[0].pole_strength: must be within +-1e+06 A m for a bar magnet"));
+    CHECK_THAT(sceneError(kMinimal + "[[magnets]]\nkind = \"loop\"\nradius = 0.01\ncurrent = -1e10\n"),
+               Contains("t.toml:9: magnets[0].current: must be within +-1e+09 A for a loop magnet (got -1e+10;"));
+    CHECK_NOTHROW(scene(kMinimal + "[[magnets]]\nmoment = 1e6\n"));
+}
+
 TEST_CASE("boxes need max > min on every axis", "[scene]")
 {
     std::string msg = sceneError("[fluid]\n[[fluid.block]]\nmin = [0, 0, 0]\nmax = [1, -1, 1]\ncount = 5\n");
