@@ -171,6 +171,83 @@ TEST_CASE("a blow-up stops with a clear message and keeps the frames written", "
     fs::remove_all(dir);
 }
 
+TEST_CASE("--resume trusts a frame only if its header agrees with its name and no earlier frame is missing (issue 15)", "[cli]") {
+    // A stray particles_0099.ply whose header said frame 3 was resumed "after frame 99"
+    // (frames 4.. never written); a missing middle frame was a silent gap.
+    const TempDir tmp("resume_trust");
+    const std::string scene = tmp.write("s.toml", R"([shot]
+fps = 3000
+[fluid]
+[[fluid.block]]
+min = [0, 0, 0]
+max = [0.01, 0.01, 0.005]
+count = 500
+[container]
+type = "box"
+min = [0, 0, 0]
+max = [0.01, 0.01, 0.02]
+)");
+    const fs::path out = tmp.path / "out";
+    const std::string sim = kSim + " " + scene + " --out " + out.string() + " --threads 1";
+    auto headerFrame = [&](int f) { return std::stoi(readParticleFile(frame(out, f)).comment("frame")); };
+    auto fresh = [&](int frames) {
+        fs::remove_all(out);
+        REQUIRE(run(sim + " --quiet --max-frames " + std::to_string(frames)).code == 0);
+    };
+
+    SECTION("a stray later frame whose header disagrees is not resumed from, nor touched") {
+        fresh(3);
+        fs::copy_file(frame(out, 3), frame(out, 99));
+        const std::string stray = slurp(frame(out, 99)), f3 = slurp(frame(out, 3));
+        const CommandResult r = run(sim + " --max-frames 5 --resume");
+        CAPTURE(r.output);
+        REQUIRE(r.code == 0);
+        REQUIRE(r.output.find("resuming after frame 3") != std::string::npos);
+        REQUIRE(r.output.find("frames up to 99 exist (frame 4 is missing); frames 4 to 5 are rewritten, later ones left "
+                              "as they are") != std::string::npos);
+        for (int f = 0; f <= 5; ++f) REQUIRE(headerFrame(f) == f);
+        REQUIRE(slurp(frame(out, 3)) == f3);
+        REQUIRE(slurp(frame(out, 99)) == stray);  // beyond this run's frames: left as it was
+    }
+    SECTION("a missing middle frame: resume after the frame before it, and fill the gap") {
+        fresh(3);
+        const std::string f1 = slurp(frame(out, 1));
+        fs::remove(frame(out, 2));
+        const CommandResult r = run(sim + " --max-frames 4 --resume");
+        CAPTURE(r.output);
+        REQUIRE(r.code == 0);
+        REQUIRE(r.output.find("resuming after frame 1") != std::string::npos);
+        REQUIRE(r.output.find("frame 2 is missing") != std::string::npos);
+        for (int f = 0; f <= 4; ++f) REQUIRE(headerFrame(f) == f);
+        REQUIRE(slurp(frame(out, 1)) == f1);
+    }
+    SECTION("a frame whose header names another frame is not resumed from") {
+        fresh(3);
+        fs::copy_file(frame(out, 1), frame(out, 3), fs::copy_options::overwrite_existing);
+        const std::string f2 = slurp(frame(out, 2));
+        const CommandResult r = run(sim + " --max-frames 3 --resume");
+        CAPTURE(r.output);
+        REQUIRE(r.code == 0);
+        REQUIRE(r.output.find("particles_0003.ply: its header says frame 1") != std::string::npos);
+        REQUIRE(r.output.find("resuming after frame 2") != std::string::npos);
+        for (int f = 0; f <= 3; ++f) REQUIRE(headerFrame(f) == f);
+        REQUIRE(slurp(frame(out, 2)) == f2);
+    }
+    SECTION("no frame 0: refused with one line, nothing touched") {
+        fresh(2);
+        fs::remove(frame(out, 0));
+        const std::string f2 = slurp(frame(out, 2));
+        const CommandResult r = run(sim + " --max-frames 4 --resume");
+        CAPTURE(r.output);
+        REQUIRE(r.code == 2);
+        REQUIRE(lines(r.output) == 1);
+        REQUIRE(r.output.find("particles_0000.ply: missing, so no frame in") != std::string::npos);
+        REQUIRE(!fs::exists(frame(out, 0)));
+        REQUIRE(!fs::exists(frame(out, 3)));
+        REQUIRE(slurp(frame(out, 2)) == f2);
+    }
+}
+
 TEST_CASE("a run killed mid-way and resumed matches an uninterrupted run", "[cli][slow]") {
     const fs::path ref = freshDir("ref"), cut = freshDir("cut");
     const std::string args = " --max-frames 8 --quiet --set sim.solver=wcsph --threads 2";
