@@ -126,14 +126,29 @@ void runShot(const SimScene& scene, const RunOptions& opt) {
 
     int frame = 0;
     bool resumed = false;
-    // Resume from the newest frame that reads back completely (writes are atomic, so
-    // normally the newest; a damaged file is skipped, never rewritten).
-    for (auto it = frames.rbegin(); opt.resume && it != frames.rend(); ++it) {
+    // A frame is trusted only if every earlier frame file exists and its header's `frame`
+    // comment is the number in its name: frames 0..gap-1 are the candidates. Resume from
+    // the newest candidate that reads back completely (writes are atomic, so normally the
+    // newest). Frames after the resume point (a damaged or mislabelled candidate, frames
+    // after a gap, stray files) are left as they are until the run reaches and rewrites them.
+    int gap = 0;
+    while (gap < int(frames.size()) && frames[size_t(gap)] == gap) ++gap;
+    if (opt.resume && !frames.empty() && gap == 0)
+        throw SceneError(particleFramePath(opt.outDir, 0) + ": missing, so no frame in " + opt.outDir +
+                         " can be trusted to resume from (found " +
+                         fs::path(particleFramePath(opt.outDir, frames.front())).filename().string() +
+                         "); pass --overwrite to start over");
+    for (auto it = frames.rend() - gap; opt.resume && it != frames.rend(); ++it) {
         ParticleTable t;
         try {
             t = readParticleFile(particleFramePath(opt.outDir, *it));
         } catch (const ParticleFileError& e) {
             std::cerr << "ferro-sim: warning: skipping unreadable " << e.what() << "\n";
+            continue;
+        }
+        if (t.commentNumber("frame", -1) != *it) {
+            std::cerr << "ferro-sim: warning: skipping " << particleFramePath(opt.outDir, *it)
+                      << ": its header says frame " << t.comment("frame", "(none)") << "\n";
             continue;
         }
         const std::string fp = t.comment("scene_fingerprint");
@@ -156,6 +171,18 @@ void runShot(const SimScene& scene, const RunOptions& opt) {
         frame = *it;
         resumed = true;
         break;
+    }
+    if (resumed && frames.back() > frame) {
+        // Say which frames the run will rewrite, and why it did not resume after them.
+        const std::string why = gap < int(frames.size())
+            ? "frame " + std::to_string(gap) + " is missing"
+            : "frame " + std::to_string(frame + 1) + " cannot be trusted";
+        std::cerr << "ferro-sim: warning: resuming after frame " << frame << " although frames up to "
+                  << frames.back() << " exist (" << why << "); "
+                  << (lastFrame > frame ? "frames " + std::to_string(frame + 1) + " to " + std::to_string(lastFrame) +
+                                              " are rewritten, later ones left as they are"
+                                        : std::string("they are left as they are"))
+                  << "\n";
     }
     if (!resumed) {
         if (opt.resume && !frames.empty())

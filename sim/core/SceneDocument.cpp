@@ -292,7 +292,7 @@ double TableReader::number(const std::string& key) const
         fail(key, std::string("expected a number (got ") + typeName(*n) + ")");
     // TOML allows nan and inf; no physical parameter of a shot can be either.
     if (!std::isfinite(v))
-        fail(key, "expected a finite number (got " + formatNumber(v) + ")");
+        fail(key, "must be finite (got " + formatNumber(v) + ")");
     return v;
 }
 
@@ -354,9 +354,13 @@ int TableReader::integerInRange(const std::string& key, int def, long lo, long h
 Vec3d TableReader::unitVector(const std::string& key, const Vec3d& def) const
 {
     const Vec3d d = vec3(key, def);
-    if (!(d.norm() > 0))
+    // Scaled by its largest component first: the norm of [1e308, 1e308, 0] overflows and
+    // that of [1e-200, 0, 0] underflows, and either normalized to a zero vector that the
+    // next reader of this default (a magnet key) then blamed on a key nobody set.
+    const double big = d.cwiseAbs().maxCoeff();
+    if (!(big > 0))
         fail(key, "must be a non-zero vector (got " + formatVec(d) + ")");
-    return d.normalized();
+    return (d / big).normalized();
 }
 
 void TableReader::box(const std::string& minKey, const std::string& maxKey, Vec3d& lo, Vec3d& hi) const
@@ -421,9 +425,11 @@ Vec3d TableReader::vec3(const std::string& key) const
         else
             fail(key, std::string("expected an array of 3 numbers (element ") + std::to_string(i) +
                           " is a " + typeName(e) + ")");
-        if (!std::isfinite(v[Eigen::Index(i)]))
-            fail(key, "expected finite numbers (got " + formatVec(v) + ")");
     }
+    // Checked once all three are read: the message shows the values given, never the
+    // uninitialised elements after a nan.
+    if (!v.allFinite())
+        fail(key, "must be finite (got " + formatVec(v) + ")");
     return v;
 }
 

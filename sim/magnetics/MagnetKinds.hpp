@@ -41,6 +41,15 @@ struct MagnetKindInfo {
     const char* name;         ///< scene `kind` and particle-file header word
     const char* strengthKey;  ///< scene key of Magnet::strength
     const char* strengthUnit; ///< its SI unit, for documentation and messages
+    /// Largest |strength| a scene may set (MagnetScene.cpp refuses more, naming the key).
+    /// Each is beyond any real magnet, yet keeps H, M and H^2 well inside a float where
+    /// particles can be (float overflowed from field = 1e20 A/m: H^2 = 1e40 made H NaN):
+    ///   dipole  1e6 A m^2: a cubic metre of NdFeB (M ~ 1e6 A/m); H = 1.6e14 A/m at 1 mm;
+    ///   bar     1e6 A m:   a pole face of 1 m^2 of NdFeB;
+    ///   uniform 1e9 A/m:   1257 T, beyond the strongest field ever made (~1000 T, pulsed);
+    ///   loop    1e9 A:     several times the ampere-turns of a fusion reactor's central
+    ///                      solenoid (~1.5e8); H = 5e11 A/m at the centre of a 1 mm loop.
+    double maxStrength;
     bool positioned;          ///< reads `position` and `softening` (false: same everywhere)
     bool usesLength;          ///< `length` required: the distance between the poles
     bool usesRadius;          ///< `radius` required: the loop's radius
@@ -60,14 +69,14 @@ Mat3d loopMagnetGradient(const Magnet&, const Vec3d&, const Vec3d&);
 
 /// One row per kind, in MagnetKind order.
 inline const MagnetKindInfo kMagnetKinds[] = {
-    // kind                 name       strength key     unit      pos.   length radius body
-    {MagnetKind::Dipole, "dipole", "moment", "A m^2", true, false, false, MagnetBody::Rod, &dipoleMagnetField,
+    // kind                 name       strength key     unit   max strength  pos.   length radius body
+    {MagnetKind::Dipole, "dipole", "moment", "A m^2", 1e6, true, false, false, MagnetBody::Rod, &dipoleMagnetField,
      &dipoleMagnetGradient},
-    {MagnetKind::Bar, "bar", "pole_strength", "A m", true, true, false, MagnetBody::Rod, &barMagnetField,
+    {MagnetKind::Bar, "bar", "pole_strength", "A m", 1e6, true, true, false, MagnetBody::Rod, &barMagnetField,
      &barMagnetGradient},
-    {MagnetKind::Uniform, "uniform", "field", "A/m", false, false, false, MagnetBody::None, &uniformMagnetField,
+    {MagnetKind::Uniform, "uniform", "field", "A/m", 1e9, false, false, false, MagnetBody::None, &uniformMagnetField,
      &uniformMagnetGradient},
-    {MagnetKind::Loop, "loop", "current", "A", true, false, true, MagnetBody::Ring, &loopMagnetField,
+    {MagnetKind::Loop, "loop", "current", "A", 1e9, true, false, true, MagnetBody::Ring, &loopMagnetField,
      &loopMagnetGradient},
 };
 

@@ -1,10 +1,22 @@
 #include "sim/magnetics/MagnetScene.hpp"
 
+#include <cmath>
 #include <limits>
 
 namespace ferro {
 
 namespace {
+
+// The strength key of `r`, or `def` if absent; refused beyond the kind's maxStrength.
+double strength(const TableReader& r, const MagnetKindInfo& info, double def)
+{
+    const double s = r.number(info.strengthKey, def);
+    if (!(std::abs(s) <= info.maxStrength))
+        r.fail(info.strengthKey, "must be within +-" + formatNumber(info.maxStrength) + " " + info.strengthUnit +
+                                     " for a " + info.name + " magnet (got " + formatNumber(s) +
+                                     "; stronger fields overflow the solver's floats)");
+    return s;
+}
 
 MagnetTrack parseMagnet(const TableReader& r)
 {
@@ -13,11 +25,10 @@ MagnetTrack parseMagnet(const TableReader& r)
     // The kind's row in the table says which keys it reads.
     const MagnetKindInfo& info = *findMagnetKind(r.choice("kind", magnetKindNames(), "dipole"));
     m.kind = info.kind;
-    const std::string sKey = info.strengthKey;
     if (info.positioned)
         m.position = r.vec3("position", m.position);
     m.direction = r.unitVector("direction", m.direction);
-    m.strength = r.number(sKey, 0.0);
+    m.strength = strength(r, info, 0.0);
     if (info.usesLength)
         m.length = r.positive("length");
     if (info.usesRadius)
@@ -36,7 +47,7 @@ MagnetTrack parseMagnet(const TableReader& r)
         lastTime = key.time;
         key.position = info.positioned ? k.vec3("position", m.position) : m.position;
         key.direction = k.unitVector("direction", m.direction);
-        key.strength = k.number(sKey, m.strength);
+        key.strength = strength(k, info, m.strength);
         k.finish();
         track.keys.push_back(key);
     }

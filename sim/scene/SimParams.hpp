@@ -5,6 +5,7 @@
 // the matching scene key (see examples/annotated.toml).
 #include "sim/magnetics/MagnetField.hpp"
 #include "sim/magnetics/MagnetizationParams.hpp"
+#include "sim/core/ParticleFile.hpp"
 #include "sim/core/Types.hpp"
 
 #include <string>
@@ -84,7 +85,12 @@ struct SolverParams {
 struct ShotParams {
     double fps = 30.0;                ///< output frames per second [1/s]
     double duration = 1.0;            ///< simulated time [s]
-    int frameCount() const { return static_cast<int>(duration * fps + 0.5); }
+    /// Frames after frame 0, rounded; at most kMaxFrame (the parser refuses longer shots),
+    /// so the cast never overflows an int whatever the fields hold.
+    int frameCount() const {
+        const double n = duration * fps + 0.5;
+        return n >= 0 && n < kMaxFrame ? static_cast<int>(n) : n >= kMaxFrame ? kMaxFrame : 0;
+    }
 };
 
 /// Everything ferro-sim needs to run a shot.

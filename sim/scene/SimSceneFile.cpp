@@ -28,6 +28,16 @@ ShotParams parseShot(const SceneDocument& doc)
     ShotParams p;
     p.fps = r.positive("fps", p.fps);
     p.duration = r.positive("duration", p.duration);
+    // Frame numbers are ints with seven digits in file names: blame the key that is
+    // further from its default (the one the user most likely set).
+    const double frames = p.duration * p.fps;
+    if (!(frames + 0.5 < kMaxFrame + 1.0)) {
+        const ShotParams def;
+        const std::string key = p.fps / def.fps > p.duration / def.duration ? "fps" : "duration";
+        r.fail(key, "duration * fps makes " + formatNumber(frames) + " frames, more than " +
+                        std::to_string(kMaxFrame) + " (got duration " + formatNumber(p.duration) + " s, fps " +
+                        formatNumber(p.fps) + ")");
+    }
     r.finish();
     return p;
 }

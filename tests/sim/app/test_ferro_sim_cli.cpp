@@ -6,6 +6,7 @@
 #include <catch2/catch.hpp>
 
 #include <chrono>
+#include <cmath>
 #include <csignal>
 #include <cstdio>
 #include <filesystem>
@@ -79,6 +80,9 @@ TEST_CASE("ferro-sim rejects bad input with one line and exit code 2", "[cli]") 
         {"--set shot.fps=fast", "shot.fps"},
         {"--resume --overwrite", "--resume excludes --overwrite"},
         {"--max-frames -3", "--max-frames"},
+        // Issue 15: these overflowed frameCount ("frames to -2147483648") and exited 0.
+        {"--set shot.duration=1e9", "shot.duration: duration * fps makes"},
+        {"--set shot.fps=1e30", "shot.fps: duration * fps makes"},
     };
     for (const Case& c : cases) {
         const CommandResult r = run(kSim + " " + example("dam_break.toml") + " --out " + dir.string() + " " + c.args);
@@ -93,6 +97,66 @@ TEST_CASE("ferro-sim rejects bad input with one line and exit code 2", "[cli]") 
     fs::remove_all(dir);
 }
 
+TEST_CASE("magnet strengths: beyond the limit exit 2, at the limit the written frames stay finite (issue 15)", "[cli]") {
+    // A 2 cm dish, 500 particles, one magnet of each kind at its kind's largest accepted
+    // strength (MagnetKinds.hpp). field = 1e20 used to write NaN H with exit 0.
+    const TempDir tmp("magnet_limits");
+    // fps 3000: frame 1 is a few steps after frame 0, so each run takes well under a second.
+    const std::string fluid = R"([shot]
+fps = 3000
+[fluid]
+rest_density = 1200.0
+[[fluid.block]]
+shape = "cylinder"
+radius = 0.01
+height = 0.004
+count = 500
+[container]
+type = "dish"
+radius = 0.01
+height = 0.01
+[magnetization]
+susceptibility = 1.0
+saturation = 30000.0
+[[magnets]]
+)";
+    struct Case {
+        std::string magnet, key;
+    };
+    const std::vector<Case> cases = {
+        {"kind = \"uniform\"\nfield = 1e9\n", "field=1e20"},
+        {"kind = \"dipole\"\nposition = [0, 0, -0.005]\nmoment = 1e6\n", "moment=1e36"},
+        {"kind = \"bar\"\nposition = [0, 0, -0.015]\nlength = 0.02\npole_strength = -1e6\n", "pole_strength=1e7"},
+        {"kind = \"loop\"\nposition = [0, 0, -0.005]\nradius = 0.005\ncurrent = 1e9\n", "current=2e9"},
+    };
+    for (const Case& c : cases) {
+        const std::string scene = tmp.write("s.toml", fluid + c.magnet);
+        const std::string out = tmp.file("out");
+        fs::remove_all(out);
+        const CommandResult bad = run(kSim + " " + scene + " --out " + out + " --quiet --max-frames 1 --set magnets.0." + c.key);
+        CAPTURE(c.magnet, bad.output);
+        REQUIRE(bad.code == 2);
+        REQUIRE(lines(bad.output) == 1);
+        REQUIRE(bad.output.find("magnets[0]." + c.key.substr(0, c.key.find('=')) + ": must be within") != std::string::npos);
+        REQUIRE(!fs::exists(frame(out, 0)));
+
+        // The largest accepted strength: runs, or stops with the sanity guard's one line and
+        // exit 3; every frame it wrote holds finite values only.
+        const CommandResult r = run(kSim + " " + scene + " --out " + out + " --quiet --max-frames 1 --threads 2");
+        CAPTURE(r.output);
+        REQUIRE((r.code == 0 || (r.code == 3 && lines(r.output) == 1)));
+        REQUIRE(fs::exists(frame(out, 0)));
+        for (int f = 0; f <= 1 && fs::exists(frame(out, f)); ++f) {
+            const ParticleTable t = readParticleFile(frame(out, f));
+            REQUIRE(t.rows() == 500);
+            size_t nonFinite = 0;
+            for (float v : t.values) nonFinite += !std::isfinite(v);
+            CAPTURE(f);
+            REQUIRE(nonFinite == 0);
+        }
+    }
+}
+
 TEST_CASE("a blow-up stops with a clear message and keeps the frames written", "[cli]") {
     const fs::path dir = freshDir("nan");
     // Absurd gravity overflows float velocities within a few steps.
@@ -105,6 +169,83 @@ TEST_CASE("a blow-up stops with a clear message and keeps the frames written", "
     REQUIRE(fs::exists(frame(dir, 0)));
     REQUIRE(readParticleFile(frame(dir, 0)).rows() == 3200);
     fs::remove_all(dir);
+}
+
+TEST_CASE("--resume trusts a frame only if its header agrees with its name and no earlier frame is missing (issue 15)", "[cli]") {
+    // A stray particles_0099.ply whose header said frame 3 was resumed "after frame 99"
+    // (frames 4.. never written); a missing middle frame was a silent gap.
+    const TempDir tmp("resume_trust");
+    const std::string scene = tmp.write("s.toml", R"([shot]
+fps = 3000
+[fluid]
+[[fluid.block]]
+min = [0, 0, 0]
+max = [0.01, 0.01, 0.005]
+count = 500
+[container]
+type = "box"
+min = [0, 0, 0]
+max = [0.01, 0.01, 0.02]
+)");
+    const fs::path out = tmp.path / "out";
+    const std::string sim = kSim + " " + scene + " --out " + out.string() + " --threads 1";
+    auto headerFrame = [&](int f) { return std::stoi(readParticleFile(frame(out, f)).comment("frame")); };
+    auto fresh = [&](int frames) {
+        fs::remove_all(out);
+        REQUIRE(run(sim + " --quiet --max-frames " + std::to_string(frames)).code == 0);
+    };
+
+    SECTION("a stray later frame whose header disagrees is not resumed from, nor touched") {
+        fresh(3);
+        fs::copy_file(frame(out, 3), frame(out, 99));
+        const std::string stray = slurp(frame(out, 99)), f3 = slurp(frame(out, 3));
+        const CommandResult r = run(sim + " --max-frames 5 --resume");
+        CAPTURE(r.output);
+        REQUIRE(r.code == 0);
+        REQUIRE(r.output.find("resuming after frame 3") != std::string::npos);
+        REQUIRE(r.output.find("frames up to 99 exist (frame 4 is missing); frames 4 to 5 are rewritten, later ones left "
+                              "as they are") != std::string::npos);
+        for (int f = 0; f <= 5; ++f) REQUIRE(headerFrame(f) == f);
+        REQUIRE(slurp(frame(out, 3)) == f3);
+        REQUIRE(slurp(frame(out, 99)) == stray);  // beyond this run's frames: left as it was
+    }
+    SECTION("a missing middle frame: resume after the frame before it, and fill the gap") {
+        fresh(3);
+        const std::string f1 = slurp(frame(out, 1));
+        fs::remove(frame(out, 2));
+        const CommandResult r = run(sim + " --max-frames 4 --resume");
+        CAPTURE(r.output);
+        REQUIRE(r.code == 0);
+        REQUIRE(r.output.find("resuming after frame 1") != std::string::npos);
+        REQUIRE(r.output.find("frame 2 is missing") != std::string::npos);
+        for (int f = 0; f <= 4; ++f) REQUIRE(headerFrame(f) == f);
+        REQUIRE(slurp(frame(out, 1)) == f1);
+    }
+    SECTION("a frame whose header names another frame is not resumed from") {
+        fresh(3);
+        fs::copy_file(frame(out, 1), frame(out, 3), fs::copy_options::overwrite_existing);
+        const std::string f2 = slurp(frame(out, 2));
+        const CommandResult r = run(sim + " --max-frames 3 --resume");
+        CAPTURE(r.output);
+        REQUIRE(r.code == 0);
+        REQUIRE(r.output.find("particles_0003.ply: its header says frame 1") != std::string::npos);
+        REQUIRE(r.output.find("resuming after frame 2") != std::string::npos);
+        for (int f = 0; f <= 3; ++f) REQUIRE(headerFrame(f) == f);
+        REQUIRE(slurp(frame(out, 2)) == f2);
+    }
+    SECTION("no frame 0: refused with one line, nothing touched") {
+        fresh(2);
+        fs::remove(frame(out, 0));
+        const std::string f2 = slurp(frame(out, 2));
+        const CommandResult r = run(sim + " --max-frames 4 --resume");
+        CAPTURE(r.output);
+        REQUIRE(r.code == 2);
+        REQUIRE(lines(r.output) == 1);
+        REQUIRE(r.output.find("particles_0000.ply: missing, so no frame in") != std::string::npos);
+        REQUIRE(!fs::exists(frame(out, 0)));
+        REQUIRE(!fs::exists(frame(out, 3)));
+        REQUIRE(slurp(frame(out, 2)) == f2);
+    }
 }
 
 TEST_CASE("a run killed mid-way and resumed matches an uninterrupted run", "[cli][slow]") {

@@ -5,6 +5,7 @@
 
 #include <catch2/catch.hpp>
 
+#include <cmath>
 #include <filesystem>
 #include <functional>
 
@@ -278,7 +279,7 @@ TEST_CASE("wrong types are errors", "[scene]")
     CHECK_THAT(sceneError(kMinimal + "[container]\ntype = 3\n"),
                Contains("t.toml:7: container.type: expected a string (got integer)"));
     CHECK_THAT(sceneError("fluid = 3\n"), Contains("t.toml:1: fluid: expected a table"));
-    CHECK_THAT(sceneError("[fluid]\nspacing = nan\n"), Contains("t.toml:2: fluid.spacing: expected a finite number"));
+    CHECK_THAT(sceneError("[fluid]\nspacing = nan\n"), Contains("t.toml:2: fluid.spacing: must be finite (got nan)"));
 }
 
 TEST_CASE("missing required keys name the table's line", "[scene]")
@@ -322,6 +323,86 @@ TEST_CASE("range violations are errors", "[scene]")
     CHECK_THAT(sceneError("[fluid]\n[[fluid.block]]\nmin = [0,0,0]\nmax = [1,1,1]\n"),
                Contains("t.toml:1: fluid.spacing: must be > 0 unless a [[fluid.block]] has count > 0"));
     CHECK_NOTHROW(scene("[fluid]\nspacing = 0.01\n[[fluid.block]]\nmin = [0,0,0]\nmax = [1,1,1]\n"));
+}
+
+TEST_CASE("a shot longer than kMaxFrame frames is refused, naming the key set (issue 15)", "[scene]")
+{
+    // duration * fps used to overflow ShotParams::frameCount's int: "frames to -2147483648".
+    CHECK_THAT(sceneError(kMinimal, {"shot.duration=1e9"}),
+               Contains("--set shot.duration:1: shot.duration: duration * fps makes 3e+10 frames, more than 9999999 "
+                        "(got duration 1e+09 s, fps 30)"));
+    CHECK_THAT(sceneError(kMinimal, {"shot.fps=1e30"}), Contains("--set shot.fps:1: shot.fps: duration * fps makes 1e+30 frames"));
+    CHECK_THAT(sceneError(kMinimal + "[shot]\nfps = 1000\nduration = 10000\n"), Contains("t.toml:8: shot.duration:"));
+    // The largest shot that fits is accepted.
+    CHECK(scene(kMinimal, {"shot.fps=1", "shot.duration=9999999"}).shot.frameCount() == 9999999);
+    // frameCount never overflows, even for fields set in code.
+    ShotParams p;
+    p.duration = 1e9;
+    CHECK(p.frameCount() == 9999999);
+    p.fps = std::nan("");
+    CHECK(p.frameCount() == 0);
+}
+
+TEST_CASE("non-finite numbers are refused by every numeric getter, showing the values given (issue 15)", "[scene]")
+{
+    // vec3 used to fail on the first nan with the later elements uninitialised:
+    // "got [nan, 4e-323, 1.14e+243]".
+    CHECK(sceneError(kMinimal + "[sim]\ngravity = [nan, 0, 0]\n") ==
+          "t.toml:7: sim.gravity: must be finite (got [nan, 0, 0])");
+    CHECK(sceneError("[fluid]\n[[fluid.block]]\nshape = \"cylinder\"\nradius = 1\nheight = 1\ncount = 5\n",
+                     {"fluid.block.0.center=[nan,0,0]"}) ==
+          "--set fluid.block.0.center:1: fluid.block[0].center: must be finite (got [nan, 0, 0])");
+    CHECK(sceneError(kMinimal + "[sim]\ngravity = [1, 2, -inf]\n") ==
+          "t.toml:7: sim.gravity: must be finite (got [1, 2, -inf])");
+    // box, unitVector, number, positive, nonNegative.
+    CHECK(sceneError("[fluid]\n[[fluid.block]]\nmin = [0, inf, 0]\nmax = [1, 1, 1]\ncount = 5\n") ==
+          "t.toml:3: fluid.block[0].min: must be finite (got [0, inf, 0])");
+    CHECK(sceneError(kMinimal + "[[magnets]]\ndirection = [0, nan, 1]\n") ==
+          "t.toml:7: magnets[0].direction: must be finite (got [0, nan, 1])");
+    CHECK(sceneError(kMinimal + "[sim]\ncfl = nan\n") == "t.toml:7: sim.cfl: must be finite (got nan)");
+    CHECK(sceneError(kMinimal + "[sim]\nmax_dt = inf\n") == "t.toml:7: sim.max_dt: must be finite (got inf)");
+    CHECK(sceneError("[fluid]\nviscosity = -inf\n") == "t.toml:2: fluid.viscosity: must be finite (got -inf)");
+}
+
+TEST_CASE("a huge or tiny direction is normalized, and errors name the key the user set (issue 15)", "[scene]")
+{
+    // The norm of [1e308, 1e308, 0] overflowed: the magnet's direction became [0, 0, 0]
+    // and the error blamed magnets[0].keys[0].direction, a key not set.
+    const std::string keyed = kMinimal + "[[magnets]]\nmoment = 1\n[[magnets.keys]]\ntime = 0\n";
+    const double r = std::sqrt(0.5);
+    for (const char* set : {"magnets.0.direction=[1e308,1e308,0]", "magnets.0.direction=[1e-200,1e-200,0]",
+                            "magnets.0.direction=[5e-324,5e-324,0]"}) {
+        CAPTURE(set);
+        const SimScene s = scene(keyed, {set});
+        REQUIRE(s.magnets.size() == 1);
+        CHECK(s.magnets[0].base.direction.isApprox(Vec3d(r, r, 0)));
+        REQUIRE(s.magnets[0].keys.size() == 1);
+        CHECK(s.magnets[0].keys[0].direction.isApprox(Vec3d(r, r, 0)));
+    }
+    CHECK(sceneError(keyed, {"magnets.0.direction=[0,0,0]"}) ==
+          "--set magnets.0.direction:1: magnets[0].direction: must be a non-zero vector (got [0, 0, 0])");
+    CHECK(sceneError(keyed, {"magnets.0.keys.0.direction=[0,0,0]"}) ==
+          "--set magnets.0.keys.0.direction:1: magnets[0].keys[0].direction: must be a non-zero vector (got [0, 0, 0])");
+    CHECK(scene(keyed, {"magnets.0.keys.0.direction=[0,-1e308,-1e308]"}).magnets[0].keys[0].direction.isApprox(Vec3d(0, -r, -r)));
+}
+
+TEST_CASE("magnet strengths beyond the kind's maxStrength are refused, naming the key (issue 15)", "[scene]")
+{
+    // field = 1e20 A/m made every particle's H NaN (H^2 overflows a float); moment = 1e36 gave inf.
+    const std::string uniform = kMinimal + "[[magnets]]\nkind = \"uniform\"\nfield = 1\n[[magnets.keys]]\ntime = 0\n";
+    CHECK(sceneError(uniform, {"magnets.0.field=1e20"}) ==
+          "--set magnets.0.field:1: magnets[0].field: must be within +-1e+09 A/m for a uniform magnet (got 1e+20; "
+          "stronger fields overflow the solver's floats)");
+    CHECK_THAT(sceneError(uniform, {"magnets.0.keys.0.field=-2e9"}),
+               Contains("--set magnets.0.keys.0.field:1: magnets[0].keys[0].field: must be within +-1e+09 A/m"));
+    CHECK(scene(uniform, {"magnets.0.field=-1e9"}).magnets[0].base.strength == -1e9);
+    CHECK_THAT(sceneError(kMinimal + "[[magnets]]\nmoment = 1e36\n"),
+               Contains("t.toml:7: magnets[0].moment: must be within +-1e+06 A m^2 for a dipole magnet (got 1e+36;"));
+    CHECK_THAT(sceneError(kMinimal + "[[magnets]]\nkind = \"bar\"\nlength = 0.01\npole_strength = 2e6\n"),
+               Contains("t.toml:9: magnets[0].pole_strength: must be within +-1e+06 A m for a bar magnet"));
+    CHECK_THAT(sceneError(kMinimal + "[[magnets]]\nkind = \"loop\"\nradius = 0.01\ncurrent = -1e10\n"),
+               Contains("t.toml:9: magnets[0].current: must be within +-1e+09 A for a loop magnet (got -1e+10;"));
+    CHECK_NOTHROW(scene(kMinimal + "[[magnets]]\nmoment = 1e6\n"));
 }
 
 TEST_CASE("boxes need max > min on every axis", "[scene]")
