@@ -171,7 +171,7 @@ TEST_CASE("a blow-up stops with a clear message and keeps the frames written", "
     fs::remove_all(dir);
 }
 
-TEST_CASE("--resume trusts a frame only if its header agrees with its name and no earlier frame is missing (issue 15)", "[cli]") {
+TEST_CASE("resume trusts a frame only if its header agrees with its name and no earlier frame is missing (issue 15)", "[cli]") {
     // A stray particles_0099.ply whose header said frame 3 was resumed "after frame 99"
     // (frames 4.. never written); a missing middle frame was a silent gap.
     const TempDir tmp("resume_trust");
