@@ -8,19 +8,6 @@
 
 namespace ferro {
 
-namespace {
-
-int intInRange(const TableReader& r, const std::string& key, int def, long lo, long hi)
-{
-    const long v = r.integer(key, def);
-    if (v < lo || v > hi)
-        r.fail(key, "must be in [" + std::to_string(lo) + ", " + std::to_string(hi) + "] (got " +
-                        std::to_string(v) + ")");
-    return int(v);
-}
-
-} // namespace
-
 RenderParams parseRenderParams(const SceneDocument& doc)
 {
     TableReader r = doc.section("render");
@@ -36,12 +23,12 @@ RenderParams parseRenderParams(const SceneDocument& doc)
     p.cameraAngle = r.number("camera_angle", p.cameraAngle);
     if (!(p.cameraAngle > 0 && p.cameraAngle < 180))
         r.fail("camera_angle", "must be in (0, 180) degrees (got " + std::to_string(p.cameraAngle) + ")");
-    p.width = intInRange(r, "width", p.width, 1, 65535);
-    p.height = intInRange(r, "height", p.height, 1, 65535);
-    p.quality = intInRange(r, "quality", p.quality, 0, 11);
+    p.width = r.integerInRange("width", p.width, 1, 65535);
+    p.height = r.integerInRange("height", p.height, 1, 65535);
+    p.quality = r.integerInRange("quality", p.quality, 0, 11);
     p.antialias = r.boolean("antialias", p.antialias);
     p.antialiasThreshold = r.positive("antialias_threshold", p.antialiasThreshold);
-    p.antialiasDepth = intInRange(r, "antialias_depth", p.antialiasDepth, 1, 9);
+    p.antialiasDepth = r.integerInRange("antialias_depth", p.antialiasDepth, 1, 9);
     p.magnetLength = r.positive("magnet_length", p.magnetLength);
     p.magnetRadius = r.positive("magnet_radius", p.magnetRadius);
     r.finish();
