@@ -3,6 +3,7 @@
 // range, several frames in flight (TBB; the caller limits threads), with one failure policy:
 //   - a range over several frames needs a frame placeholder ({:04} or %04d) in every
 //     pattern, checked before any work (BadInputError naming the option);
+//   - frames start in ascending order, several at a time;
 //   - at the first failing frame no new frame starts; frames already in flight finish;
 //     the error of the lowest failing frame is rethrown; every file written stays.
 // So `--frames 0:9999999` over three existing frames stops at the first missing one with
