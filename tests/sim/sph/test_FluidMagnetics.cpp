@@ -364,3 +364,65 @@ TEST_CASE("particle files carry H, M and the magnets at the frame's time, and re
     REQUIRE(worst < 1e-5);
     fs::remove_all(dir);
 }
+
+namespace {
+
+/// RMS particle speed [m/s].
+double rmsSpeed(const FluidSimulation& sim) {
+    double sum = 0;
+    for (const Vec3& v : sim.velocities()) sum += double(v.squaredNorm());
+    return std::sqrt(sum / double(std::max<size_t>(sim.size(), 1)));
+}
+
+} // namespace
+
+// Issue 13 item 0: a 3 A m^2 dipole held 2 cm under the floor pulls the fluid with 20-30 g.
+// DFSPH's density solve used to clamp its source at rest density, which asked the pressure
+// to leave expanded particles' density unchanged instead of leaving them without pressure:
+// pressure built up in expanding fluid and pumped it (this half-size dish at the paper's
+// spacing: 90-100 mm/s RMS for good; the full dish 30-40 mm/s). WCSPH settled all along.
+TEST_CASE("fluid over a magnet held still comes to rest (DFSPH and WCSPH)", "[magnetics][slow]") {
+    const std::string solver = GENERATE(std::string("dfsph"), std::string("wcsph"));
+    const std::string text = R"(
+[fluid]
+rest_density = 1200.0
+viscosity = 5e-6
+surface_tension = 0.025
+[[fluid.block]]
+shape = "cylinder"
+center = [0.0, 0.0, 0.0]
+radius = 0.025
+height = 0.01
+count = 2560          # spacing 1.24 mm, as the paper's 40,960 particles in the 10 cm dish
+[container]
+type = "dish"
+center = [0.0, 0.0, 0.0]
+radius = 0.025
+height = 0.02
+[sim]
+solver = ")" + solver + R"("
+[[magnets]]
+kind = "dipole"
+position = [0.0, 0.0, -0.02]
+direction = [0.0, 0.0, 1.0]
+moment = 3.0
+softening = 0.002
+[magnetization]
+susceptibility = 1.5
+saturation = 35000
+solver = "external"
+)";
+    FluidSimulation sim(parseSimScene(SceneDocument::parse(text, "rest_dipole.toml")));
+    REQUIRE(sim.magnetics() != nullptr);
+    double rms = 0;
+    for (int frame = 1; frame <= 8; ++frame) {   // 4 frames a second, as ferro-sim would step them
+        sim.advanceTo(0.25 * frame);
+        rms = rmsSpeed(sim);
+        if (frame == 1) REQUIRE(sim.magnetics()->maxAcceleration() > 100);   // over 10 g: a strong pull
+    }
+    CAPTURE(solver, rms);
+    REQUIRE(allFinite(sim));
+    // Before the fix: DFSPH 90-100 mm/s. After it DFSPH settles like WCSPH but keeps 1-2 mm/s
+    // of jitter in the floor layer over the magnet (see the limit below and issue 13).
+    REQUIRE(rms < (solver == "wcsph" ? 0.001 : 0.003));
+}
