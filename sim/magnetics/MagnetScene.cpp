@@ -81,7 +81,11 @@ MagnetizationParams parseMagnetization(const SceneDocument& doc)
         r.fail("opening_angle", "must be in (0, 1.5) (got " + formatNumber(p.openingAngle) + ")");
     p.resolveEvery = r.integerInRange("resolve_every", p.resolveEvery, 0, INT_MAX);
     p.maxIterations = r.integerInRange("max_iterations", p.maxIterations, 1, 10000);
-    p.inducedForce = r.boolean("induced_force", p.inducedForce);
+    if (r.has("induced_force"))
+        r.fail("induced_force", "was replaced by force = \"body\" (the default: the magnets' field gradient) or "
+                                "\"surface\" (the total field and the normal traction, as a surface pressure)");
+    const std::string force = r.choice("force", {"body", "surface"}, "body");
+    p.force = force == "body" ? MagnetizationParams::Force::Body : MagnetizationParams::Force::Surface;
     r.finish();
     return p;
 }

@@ -18,13 +18,18 @@ struct MagnetizationParams {
     double openingAngle = 0.5;     ///< Barnes-Hut opening angle theta (cell size / distance)
     int resolveEvery = 0;          ///< re-solve every K steps; 0 = when the field may have changed by > tolerance
     int maxIterations = 50;        ///< self-consistency iterations per solve (direct, tree)
-    /// Kelvin force from the gradient of the particles' own field too (SPH difference
-    /// gradient), not only of the magnets' field. Off by default: at a free surface that
-    /// gradient is the magnetic normal traction mu0 M_n^2 / 2, which a gauge-pressure SPH
-    /// fluid (no atmosphere, no tension) cannot hold, so surface particles lift off; the
-    /// instability it drives is what ferro-spikes synthesizes. The particles' field always
-    /// enters M (demagnetization), whichever way this is set.
-    bool inducedForce = false;
+    /// How the magnetic force enters the fluid (sim/sph/FluidMagnetics.hpp has the
+    /// derivation):
+    ///   Surface  the Kelvin force density mu0 (M . grad) H of the TOTAL field, which for
+    ///            M parallel to H is the gradient of the magnetic pressure mu0 F(H), taken
+    ///            into the pressure: what remains is a pressure on the free surface,
+    ///            C - mu0 (F(H) + M_n^2 / 2) (Rosensweig's ferrohydrostatic boundary
+    ///            condition, normal traction included). Exact for an incompressible fluid.
+    ///   Body     the older model: a body force mu0 (M . grad) H_magnets per particle from
+    ///            the magnets' field gradient alone; no normal traction, so heaps come out
+    ///            lower. Kept for comparison (bench) and for the paper's look.
+    enum class Force { Surface, Body };
+    Force force = Force::Body;
     bool enabled() const { return susceptibility > 0; }
 };
 

@@ -64,6 +64,21 @@ double langevinSecant(double H, double chi0, double Ms) {
     return Ms * langevin(xi) / std::abs(H);
 }
 
+double langevinEnergy(double H, double chi0, double Ms) {
+    const double h = std::abs(H);
+    if (!(Ms > 0)) return 0.5 * chi0 * h * h;
+    if (!(chi0 > 0)) return 0.0;
+    const double xi = 3.0 * chi0 * h / Ms;
+    const double scale = Ms * Ms / (3.0 * chi0);
+    // ln(sinh xi / xi): the series xi^2/6 - xi^4/180 + xi^6/2835 where the difference would
+    // cancel digits, else xi + ln((1 - e^{-2 xi}) / 2) - ln xi, which never overflows.
+    if (xi < kSeriesXi) {
+        const double x2 = xi * xi;
+        return scale * x2 * (1.0 / 6 + x2 * (-1.0 / 180 + x2 * (1.0 / 2835)));
+    }
+    return scale * (xi + std::log1p(-std::exp(-2.0 * xi)) - std::log(2.0) - std::log(xi));
+}
+
 // ---------------------------------------------------------------------------------------
 // Solver
 

@@ -60,6 +60,11 @@ double langevinMagnetization(double H, double chi0, double Ms);
 double langevinSlope(double H, double chi0, double Ms);
 /// Secant susceptibility M(H) / H, chi0 at H = 0 (the limit), chi0 if Ms <= 0.
 double langevinSecant(double H, double chi0, double Ms);
+/// F(H) = integral_0^|H| M(H') dH' [A^2/m^2]: mu0 F is the fluid's magnetic pressure, the
+/// potential of the Kelvin force density mu0 M grad|H| (Rosensweig, Ferrohydrodynamics,
+/// ch. 5). Langevin: Ms^2 / (3 chi0) ln(sinh xi / xi), xi = 3 chi0 H / Ms; chi0 H^2 / 2 if
+/// Ms <= 0. Even, >= 0, finite for finite H (no sinh overflow).
+double langevinEnergy(double H, double chi0, double Ms);
 
 /// Computes particle magnetization and field for one set of positions; see file comment.
 class MagnetizationSolver {

@@ -2,6 +2,7 @@
 
 #include "sim/magnetics/MagnetizationSolver.hpp"
 #include "sim/core/ParticleLoops.hpp"
+#include "sim/sph/Kernel.hpp"
 
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
@@ -31,6 +32,40 @@ FluidMagnetics::FluidMagnetics(const SimScene& scene, double particleVolume, dou
     : tracks_(scene.magnets), law_(scene.magnetization), volume_(particleVolume), spacing_(spacing),
       rho0_(scene.fluid.restDensity), gravity_(scene.solver.gravity.norm()) {
     if (active() && magnetic()) solver_ = std::make_unique<MagnetizationSolver>(law_);
+    // The surface model's scales from a flat cubic lattice surface (the seed's lattice,
+    // support 2 spacings as FluidSimulation uses): the fill c = V sum_j W_ij of the top
+    // layer, its |grad c|, and the column sum kappa = sum_layers w V |grad c| / s^2.
+    const double s = spacing_;
+    const CubicSplineKernel kernel(Real(2 * s));
+    std::vector<double> fill, gradient;
+    for (int depth = 0; depth <= 3; ++depth) {
+        double c = 0, gz = 0;
+        for (int a = -2; a <= 2; ++a)
+            for (int b = -2; b <= 2; ++b)
+                for (int k = -2; k <= 2; ++k) {
+                    if (k > depth) continue;   // above the top layer
+                    const Vec3 rij = Vec3(Real(a), Real(b), Real(k)) * Real(-s);
+                    const Real r = rij.norm();
+                    c += volume_ * double(kernel.W(r));
+                    gz += volume_ * double(kernel.gradW(rij, r).z());
+                }
+        fill.push_back(c);
+        gradient.push_back(std::abs(gz));
+    }
+    flatFill_ = fill[0];
+    flatGradient_ = gradient[0];
+    double column = 0;
+    for (size_t k = 0; k < fill.size(); ++k) column += surfaceWeight(gradient[k]) * gradient[k];
+    layerFactor_ = volume_ * column / (s * s);
+}
+
+double FluidMagnetics::surfaceWeight(double gradient) const {
+    // 0 below a quarter of the flat lattice surface's |grad c|, 1 from half of it on.
+    // Not the fill rho / rho0: the pressure solver squeezes the top layer until its
+    // (deficient) density sum reaches rest density, so at rest every particle is full.
+    if (!(flatGradient_ > 0)) return 0;
+    const double t = std::clamp((gradient / flatGradient_ - 0.25) / 0.25, 0.0, 1.0);
+    return t * t * (3 - 2 * t);
 }
 
 FluidMagnetics::~FluidMagnetics() = default;
@@ -127,6 +162,7 @@ void FluidMagnetics::solve(const std::vector<Vec3>& x, bool forced) {
         stats_.cacheError = err;
     }
     lastFieldError_ = st.fieldError;
+    traction_ = st.solver != MagnetizationParams::Solver::External;
     HextSolved_ = Hext_;
     extSolved2_ = deterministicSum(n, [&](size_t i) { return double(Hext_[i].squaredNorm()); });
     inducedScale_ = 1;
@@ -138,7 +174,8 @@ void FluidMagnetics::solve(const std::vector<Vec3>& x, bool forced) {
     stats_.estimatedError = st.fieldError;
 }
 
-void FluidMagnetics::update(double t, const std::vector<Vec3>& x, const NeighborLists& nbr, bool forceSolve) {
+void FluidMagnetics::update(double t, const std::vector<Vec3>& x, const std::vector<Vec3>& colorGradient,
+                            const std::vector<Real>& exposure, bool forceSolve) {
     if (!active()) return;
     const size_t n = x.size();
     magnets_ = softenedMagnetsAt(t);
@@ -172,7 +209,7 @@ void FluidMagnetics::update(double t, const std::vector<Vec3>& x, const Neighbor
         applyLaw();
         ++stepsSinceSolve_;
     }
-    computeKelvin(x, nbr);
+    computeKelvin(x, colorGradient, exposure);
     if (solving) {
         // How much the Kelvin force matters beside gravity (see solveIsStale()).
         const double kelvin2 = deterministicSum(n, [&](size_t i) { return double(kelvin_[i].squaredNorm()); });
@@ -182,22 +219,14 @@ void FluidMagnetics::update(double t, const std::vector<Vec3>& x, const Neighbor
     }
 }
 
-void FluidMagnetics::computeKelvin(const std::vector<Vec3>& x, const NeighborLists& nbr) {
+void FluidMagnetics::computeKelvin(const std::vector<Vec3>& x, const std::vector<Vec3>& colorGradient,
+                                   const std::vector<Real>& exposure) {
     const size_t n = x.size();
     kelvin_.resize(n);
-    const Real scale = Real(kMu0 / rho0_);
-    const Real V = Real(volume_);
-    const bool pairs = law_.inducedForce && nbr.count.size() == n && nbr.hasGradients();
-    forEachParticle(n, [&](size_t i) {
-        // grad H = analytic Jacobian of the magnets (+ SPH difference gradient of the
-        // induced field with magnetization.induced_force).
-        Eigen::Matrix3f J = fieldGradient(magnets_, x[i].cast<double>()).cast<Real>();
-        const Vec3 hi = Hind_[i];
-        if (pairs)
-            for (uint32_t k = nbr.begin(i); k < nbr.end(i); ++k)
-                J += (Real(inducedScale_) * V * (Hind_[nbr.index[k]] - hi)) * nbr.gradW[k].transpose();
-        kelvin_[i] = scale * (J * M_[i]);
-    });
+    if (law_.force == MagnetizationParams::Force::Surface && colorGradient.size() == n && exposure.size() == n)
+        computeSurfacePressure(x, colorGradient, exposure);
+    else
+        computeBodyForce(x);
     maxAcceleration_ = std::sqrt(double(tbb::parallel_reduce(
         tbb::blocked_range<size_t>(0, n, 4096), Real(0),
         [&](const tbb::blocked_range<size_t>& r, Real m) {
@@ -205,6 +234,50 @@ void FluidMagnetics::computeKelvin(const std::vector<Vec3>& x, const NeighborLis
             return m;
         },
         [](Real a, Real b) { return std::max(a, b); })));
+}
+
+void FluidMagnetics::computeBodyForce(const std::vector<Vec3>& x) {
+    // mu0 (J_magnets M) / rho0 per unit mass (see the header).
+    const Real scale = Real(kMu0 / rho0_);
+    forEachParticle(x.size(), [&](size_t i) {
+        const Eigen::Matrix3f J = fieldGradient(magnets_, x[i].cast<double>()).cast<Real>();
+        kelvin_[i] = scale * (J * M_[i]);
+    });
+}
+
+void FluidMagnetics::computeSurfacePressure(const std::vector<Vec3>& x, const std::vector<Vec3>& gradC,
+                                            const std::vector<Real>& exposure) {
+    // p_s = C - mu0 (F(H) + M_n^2 / 2) pushed along grad c on surface particles (header).
+    const size_t n = gradC.size();
+    const double chi0 = law_.susceptibility, Ms = law_.saturation;
+    std::vector<double> psi(n, 0.0), weight(n, 0.0);
+    forEachParticle(n, [&](size_t i) {
+        const Vec3d g = gradC[i].cast<double>();
+        const double gn = g.norm();
+        weight[i] = surfaceWeight(gn) * double(exposure[i]);
+        if (weight[i] <= 0) return;
+        // At the fluid's surface, half a spacing outside the particle centre (a particle
+        // stands for the cube of fluid around it; the surface mesh is placed there too):
+        // the applied field there plus the particle's own induced field, and M from the law.
+        const Vec3d outward = -g / gn;
+        const Vec3d xs = x[i].cast<double>() + 0.5 * spacing_ * outward;
+        const Vec3d Hs = magnetField(magnets_, xs) + (H_[i] - Hext_[i]).cast<double>();
+        const double h = Hs.norm();
+        const double Mn = h > 0 ? langevinMagnetization(h, chi0, Ms) * Hs.dot(outward) / h : 0.0;
+        psi[i] = kMu0 * (langevinEnergy(h, chi0, Ms) + (traction_ ? 0.5 * Mn * Mn : 0.0));
+    });
+    // C from the particles that are surely surface (w >= 1/2): a particle that only just
+    // counts (a gap opening inside a moving fluid) would otherwise set the pressure level
+    // of the whole surface from deep in the field. Below C the push is clamped at zero.
+    double C = 0;
+    for (size_t i = 0; i < n; ++i)
+        if (weight[i] >= 0.5) C = std::max(C, psi[i]);
+    offset_ = C;
+    const double scale = 1.0 / (rho0_ * layerFactor_);
+    forEachParticle(n, [&](size_t i) {
+        kelvin_[i] = weight[i] > 0 ? Vec3((scale * weight[i] * std::max(C - psi[i], 0.0) * gradC[i].cast<double>()).cast<Real>())
+                                   : Vec3::Zero();
+    });
 }
 
 void FluidMagnetics::addKelvinAcceleration(std::vector<Vec3>& a) const {

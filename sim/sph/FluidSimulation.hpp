@@ -143,6 +143,9 @@ private:
     void updateNeighbors();
     /// Akinci 2013 surface normals n_i = h V sum_j (rho0 / rho_j) grad W_ij, for tension.
     void computeSurfaceNormals();
+    /// The colour gradient the magnetic surface force needs (when it does), then the
+    /// magnetic update of the step.
+    void updateMagnetics(bool forceSolve);
     double chooseTimeStep(double dtLimit) const;
     void integratePositions(double dt);
 
@@ -165,6 +168,8 @@ private:
     std::vector<Vec3> x_, v_, a_, xOld_;
     std::vector<Real> rho_, p_;
     std::vector<Vec3> normal_;
+    std::vector<Vec3> colorGradient_;         // grad c (walls taken out), for the magnetic force
+    std::vector<Real> exposure_;                  // exposure of the surface (1 = open), for the magnetic force
     std::vector<uint32_t> id_;
     std::vector<uint16_t> boundaryCount_;
     SortedGrid grid_;
