@@ -46,6 +46,15 @@ using Mat3d = Eigen::Matrix3d;
 
 class DipoleTree {
 public:
+    /// The default particle model: Wendland C2 support radius over the particle spacing
+    /// V^(1/3) (MagnetizationParams::smoothing; see the file comment for the choice).
+    static constexpr double kDefaultSmoothing = 2.5;
+    /// Particle model of the next build(): smoothing > 0 spreads each moment over a Wendland
+    /// C2 kernel of support smoothing * V^(1/3); 0 (or negative) makes every particle a
+    /// uniformly magnetized sphere of its volume (the model before smoothed dipoles).
+    void setSmoothing(double smoothing) { smoothing_ = smoothing > 0 ? smoothing : 0.0; }
+    double smoothing() const { return smoothing_; }
+
     /// Sorts the particles at x [m] with volumes [m^3] (negative or non-finite volumes count
     /// as 0, i.e. a particle without moment) and builds the octree. With openingAngle > 0
     /// the per-leaf interaction lists are built too (needed by the tree evaluations);
@@ -123,6 +132,9 @@ private:
     template <class Visit>
     void forEachTreeTarget(Visit&& visit) const;
     void treeFieldAt(size_t leaf, size_t k, const std::vector<float>& buf, size_t farCount, double h[3]) const;
+    // Surface sampling term (smoothed model only): h -= w_k (n_k . M_k) n_k, see the file comment.
+    void computeSurfaceTerms();
+    void addSurfaceTerm(size_t k, double h[3]) const;
     template <class Leaf, class Cell>
     void traverse(const Eigen::Vector3d& q, Leaf&& leaf, Cell&& cell) const;
     size_t leafOf(size_t k) const;
@@ -133,8 +145,10 @@ private:
     double theta_ = 0;
     std::vector<uint32_t> order_;
     // sorted particles, scaled units, SoA
-    std::vector<float> px_, py_, pz_, a2_, ainv3_, vol_;
+    double smoothing_ = kDefaultSmoothing; // kernel support / particle spacing; 0 = spheres
+    std::vector<float> px_, py_, pz_, a2_, ainv_, vol_; // a2_, ainv_: core radius^2, 1 / core radius
     std::vector<float> mx_, my_, mz_;  // moments V M (scaled volume), set by setMagnetization
+    std::vector<float> surfaceWeight_, surfaceNormal_; // per particle w = max(0, 1 - n), outward normal (3)
     std::vector<Node> nodes_;
     std::vector<float> cell_;            // per cell: moment, quadrupole, octupole (see .cpp)
     std::vector<uint32_t> leaves_;       // node index of each leaf, increasing begin

@@ -18,6 +18,12 @@ struct MagnetizationParams {
     double openingAngle = 0.5;     ///< Barnes-Hut opening angle theta (cell size / distance)
     int resolveEvery = 0;          ///< re-solve every K steps; 0 = when the field may have changed by > tolerance
     int maxIterations = 50;        ///< self-consistency iterations per solve (direct, tree)
+    /// Particle model: each particle's moment V M is spread over a Wendland C2 kernel of
+    /// support radius smoothing * V^(1/3) (dimensionless, in particle spacings; default 2.5,
+    /// about the SPH support of 2 spacings and a little more, which the disordered-ball tests
+    /// need; see sim/magnetics/DipoleTree.hpp). 0 = the older model: uniformly magnetized
+    /// spheres of volume V, exact on a cubic lattice only.
+    double smoothing = 2.5;
     /// Kelvin force from the gradient of the particles' own field too (SPH difference
     /// gradient), not only of the magnets' field. Off by default: at a free surface that
     /// gradient is the magnetic normal traction mu0 M_n^2 / 2, which a gauge-pressure SPH

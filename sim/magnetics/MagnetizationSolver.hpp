@@ -71,6 +71,10 @@ public:
         int iterations = 0;       ///< particle-field evaluations (GMRES matrix-vector products + residuals)
         int newtonSteps = 0;      ///< outer (Newton) steps
         double residual = 0;      ///< final |H - H_ext - A M| / |H_ext| (2-norms; 0 for External)
+        /// The self-consistent solve reached its target residual (0.1 * tolerance) within
+        /// maxIterations; false means H is the best iterate found, off by about `residual`.
+        /// Always true for External and skipped solves (nothing to iterate).
+        bool converged = true;
         /// Estimated relative RMS error of H against the converged all-pairs solution:
         /// External: RMS of the neglected particle field / RMS H_ext (sampled);
         /// Tree: sampled tree-vs-exact field difference / RMS H, plus the residual;
@@ -124,19 +128,25 @@ private:
 
 /// Total or induced field anywhere from a saved particle state (positions, volumes, M as
 /// written to the particle files) plus the magnets: what ferro-spikes needs at surface
-/// points. The particle field uses the same spheres model and tree as the solver, so at a
-/// particle centre inducedField() + magnetField() reproduces the solver's H.
+/// points. The particle field uses the same particle model (smoothed dipoles or spheres) and
+/// tree as the solver: inducedField() is the field of the smoothed magnetization at any
+/// point; at particle i the solver's H is inducedFieldAtParticle(i) + magnetField(), which
+/// adds the surface sampling term of DipoleTree.hpp (zero inside the fluid).
 class ParticleFieldEvaluator {
 public:
     /// Builds the tree. openingAngle 0 = exact sums (O(N) per point), default 0.5.
+    /// smoothing: the particle model, as MagnetizationParams::smoothing (pass the solver's).
     void build(const std::vector<Vec3>& x, const std::vector<Real>& volume, const std::vector<Vec3>& M,
-               double openingAngle = 0.5);
+               double openingAngle = 0.5, double smoothing = DipoleTree::kDefaultSmoothing);
     /// Field of the magnetized particles at p [m] -> [A/m].
     Vec3d inducedField(const Vec3d& p) const { return tree_.fieldAt(p); }
     /// Jacobian dH_a/dx_b [A/m^2] of the particle field at p.
     Mat3d inducedGradient(const Vec3d& p) const { return tree_.gradientAt(p); }
     /// Exact all-particle sum at p (reference, O(N)).
     Vec3d inducedFieldExact(const Vec3d& p) const { return tree_.fieldAtDirect(p); }
+    /// The particle field the solver uses at particle i (index into build()'s x): exact sum,
+    /// O(N), including the surface sampling term.
+    Vec3d inducedFieldAtParticle(size_t i) const { return tree_.fieldAtParticleDirect(sorted_[i]); }
     size_t size() const { return tree_.size(); }
     /// Total moment sum V M [A m^2] and volume centroid [m]: the far field is that dipole.
     Vec3d totalMoment() const { return tree_.totalMoment(); }
@@ -144,6 +154,7 @@ public:
 
 private:
     DipoleTree tree_;
+    std::vector<uint32_t> sorted_; // sorted_[i] = tree place of input particle i
 };
 
 /// H [A/m] at p: magnets plus magnetized particles.
