@@ -820,45 +820,63 @@ void DipoleTree::addSurfaceTerm(size_t k, double h[3]) const {
 }
 
 void DipoleTree::computeSurfaceTerms() {
-    // n_k = sum_j V_j W_j(x_k - x_j), the fraction of particle k's kernel filled with fluid
-    // (1 inside), and its gradient, by a range search of the octree (cells farther than the
-    // largest support are skipped). Outward normal = -grad n / |grad n|.
+    // n_k = sum_j V_j W_j(x_k - x_j), the filled fraction of particle k's kernel (1 inside
+    // the fluid), and its gradient. Targets are grouped by leaf: one range search of the
+    // octree per leaf (cells whose box is within the largest support of the leaf's box),
+    // then every target of the leaf runs over those candidates. Outward normal = -grad n.
     const size_t n = size();
     surfaceWeight_.assign(n, 0.0f);
     surfaceNormal_.assign(3 * n, 0.0f);
     if (n == 0 || nodes_.empty()) return;
-    const double reach = nodes_[0].maxA; // largest support
-    tbb::parallel_for(tbb::blocked_range<size_t>(0, n, 256), [&](const tbb::blocked_range<size_t>& r) {
-        std::vector<uint32_t> stack;
-        for (size_t k = r.begin(); k < r.end(); ++k) {
-            const float p[3] = {px_[k], py_[k], pz_[k]};
-            double dens = 0, grad[3] = {0, 0, 0};
+    const float reach = nodes_[0].maxA; // largest support
+    auto boxGap = [](const Node& a, const Node& b) {
+        double d2 = 0;
+        for (int k = 0; k < 3; ++k) {
+            const double g = std::max({0.0, double(a.lo[k]) - b.hi[k], double(b.lo[k]) - a.hi[k]});
+            d2 += g * g;
+        }
+        return std::sqrt(d2);
+    };
+    tbb::parallel_for(tbb::blocked_range<size_t>(0, leaves_.size(), 4), [&](const tbb::blocked_range<size_t>& r) {
+        std::vector<uint32_t> stack, ranges;
+        for (size_t l = r.begin(); l < r.end(); ++l) {
+            const Node& target = nodes_[leaves_[l]];
+            ranges.clear();
             stack.assign(1, 0);
             while (!stack.empty()) {
                 const Node& node = nodes_[stack.back()];
                 stack.pop_back();
-                if (boxDistance(p, node.lo, node.hi) >= reach) continue;
+                if (boxGap(node, target) >= reach) continue;
                 if (node.childCount > 0) {
                     for (uint32_t c = 0; c < node.childCount; ++c) stack.push_back(node.firstChild + c);
-                    continue;
-                }
-                for (uint32_t j = node.begin; j < node.end; ++j) {
-                    const double d[3] = {double(p[0]) - px_[j], double(p[1]) - py_[j], double(p[2]) - pz_[j]};
-                    const double r2 = d[0] * d[0] + d[1] * d[1] + d[2] * d[2];
-                    if (!(r2 < a2_[j])) continue;
-                    const double ai = ainv_[j], rr = std::sqrt(r2), q = rr * ai, u = 1 - q;
-                    const double c = 21.0 / (2.0 * kPi) * ai * ai * ai * vol_[j];
-                    dens += c * u * u * u * u * (1 + 4 * q);
-                    if (rr > 0) {
-                        const double dW = -20.0 * c * ai * q * u * u * u / rr; // (dW/dr) / r
-                        for (int a = 0; a < 3; ++a) grad[a] += dW * d[a];
-                    }
+                } else {
+                    ranges.push_back(node.begin);
+                    ranges.push_back(node.end);
                 }
             }
-            const double g = std::sqrt(grad[0] * grad[0] + grad[1] * grad[1] + grad[2] * grad[2]);
-            if (dens < 1 && g > 0) {
-                surfaceWeight_[k] = float(1 - dens);
-                for (int a = 0; a < 3; ++a) surfaceNormal_[3 * k + a] = float(-grad[a] / g);
+            for (uint32_t k = target.begin; k < target.end; ++k) {
+                const float px = px_[k], py = py_[k], pz = pz_[k];
+                double dens = 0, grad[3] = {0, 0, 0};
+                for (size_t q = 0; q < ranges.size(); q += 2)
+                    for (uint32_t j = ranges[q]; j < ranges[q + 1]; ++j) {
+                        const float dx = px - px_[j], dy = py - py_[j], dz = pz - pz_[j];
+                        const float r2 = dx * dx + dy * dy + dz * dz;
+                        if (!(r2 < a2_[j])) continue;
+                        const float ai = ainv_[j], rr = std::sqrt(r2), qq = rr * ai, u = 1 - qq;
+                        const float c = float(21.0 / (2.0 * kPi)) * ai * ai * ai * vol_[j];
+                        dens += c * u * u * u * u * (1 + 4 * qq);
+                        if (rr > 0) {
+                            const float dW = -20.0f * c * ai * qq * u * u * u / rr; // (dW/dr) / r
+                            grad[0] += dW * dx;
+                            grad[1] += dW * dy;
+                            grad[2] += dW * dz;
+                        }
+                    }
+                const double g = std::sqrt(grad[0] * grad[0] + grad[1] * grad[1] + grad[2] * grad[2]);
+                if (dens < 1 && g > 0) {
+                    surfaceWeight_[k] = float(1 - dens);
+                    for (int a = 0; a < 3; ++a) surfaceNormal_[3 * k + a] = float(-grad[a] / g);
+                }
             }
         }
     });
