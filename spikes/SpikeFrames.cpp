@@ -97,11 +97,13 @@ std::vector<Magnet> frameMagnets(const SpikeScene& scene, const ParticleTable& p
 }
 
 // The field [A/m] of the magnetized particles (positions x [m], magnetization M [A/m]) at a
-// point: each particle a sphere of its volume m / rho = rho0 h^3 / rho (h = spacing [m], rho0
-// the fluid's rest density, rho the file's `density` column where present; the simulator's
-// model, sim/magnetics/MagnetizationSolver.hpp), summed by a tree (opening angle 0.6).
+// point: each particle of volume m / rho = rho0 h^3 / rho (h = spacing [m], rho0 the fluid's
+// rest density, rho the file's `density` column where present) a smoothed dipole of the
+// scene's magnetization.smoothing (the simulator's model, sim/magnetics/DipoleTree.hpp),
+// summed by a tree (opening angle 0.6).
 std::function<Vec3d(const Vec3d&)> particleFieldOf(const ParticleTable& particles, const std::vector<Vec3>& x,
-                                                   const std::vector<Vec3>& M, double spacing, double restDensity)
+                                                   const std::vector<Vec3>& M, double spacing, double restDensity,
+                                                   double smoothing)
 {
     const int rho = particles.column("density");
     const double h3 = std::pow(spacing, 3);
@@ -112,7 +114,7 @@ std::function<Vec3d(const Vec3d&)> particleFieldOf(const ParticleTable& particle
             if (r > 0) volume[i] = Real(h3 * restDensity / r);
         }
     auto evaluator = std::make_shared<ParticleFieldEvaluator>();
-    evaluator->build(x, volume, M, 0.6);
+    evaluator->build(x, volume, M, 0.6, smoothing);
     return [evaluator](const Vec3d& p) { return evaluator->inducedField(p); };
 }
 
@@ -137,7 +139,8 @@ void loadParticles(const SpikeScene& scene, const ParticleTable& particles, cons
             const std::vector<Vec3> M = particles.vec3("mx", "my", "mz");
             for (size_t i = 0; i < M.size(); ++i) in.particles.magnetization[i] = double(M[i].norm());
             if (scene.params.particleField && in.particles.spacing > 0)
-                in.particleField = particleFieldOf(particles, x, M, in.particles.spacing, in.fluid.density);
+                in.particleField = particleFieldOf(particles, x, M, in.particles.spacing, in.fluid.density,
+                                                   in.fluid.law.smoothing);
         } else {
             // Older files: the fluid's law in the magnets' field at the particle.
             for (size_t i = 0; i < x.size(); ++i)

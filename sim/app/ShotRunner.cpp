@@ -223,6 +223,10 @@ void runShot(const SimScene& scene, const RunOptions& opt) {
                               fm->stats().steps, fm->stats().solver.c_str(), fm->stats().iterations,
                               100 * fm->stats().cacheError);
                 mag = buf;
+                if (!fm->stats().converged) { // stays on the frame's one line
+                    std::snprintf(buf, sizeof buf, " NOT CONVERGED (residual %.1e > tolerance/10)", fm->stats().residual);
+                    mag += buf;
+                }
             }
             std::fprintf(stderr,
                          "frame %4d/%d  t %.4f s  %5zu steps  %6.1f steps/s  dt %.2e s  iter p %d d %d  "

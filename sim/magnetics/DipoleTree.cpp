@@ -13,6 +13,7 @@
 #if defined(__SSE2__)
 #include <emmintrin.h>
 #define FERRO_DIPOLE_SSE 1
+typedef float v4sf __attribute__((vector_size(16)));
 #endif
 
 namespace ferro {
@@ -31,8 +32,31 @@ constexpr size_t kDirectChunk = 4096;
 constexpr size_t kDirectTargetBlock = 32;
 
 struct Sources {
-    const float *x, *y, *z, *mx, *my, *mz, *a2, *ai3;
+    const float *x, *y, *z, *mx, *my, *mz, *a2, *ainv; // a2, ainv: core radius^2 and 1 / core radius
 };
+
+// How a particle's field differs from a point dipole within its core radius a (see
+// DipoleTree.hpp): Point = never (far cells, whose targets lie outside every core),
+// Sphere = the uniformly magnetized sphere of radius a, Wendland = the Wendland C2
+// kernel-smoothed dipole of support a.
+enum class Core { Point, Sphere, Wendland };
+inline Core coreOf(double smoothing) { return smoothing > 0 ? Core::Wendland : Core::Sphere; }
+
+// Wendland C2 smoothed dipole, q = r / a < 1 (derivation in DipoleTree.hpp). With the
+// enclosed kernel mass Q(q) = 14 q^3 - 84 q^5 + 140 q^6 - 90 q^7 + 21 q^8 and the kernel
+// 4 pi a^3 W = 42 (1 - q)^4 (1 + 4 q), the field of moment m at offset r is
+//   4 pi H = c1 r (r . m) - c2 m,  c2 = Q / r^3 = wendlandC2(q) / a^3,
+//   c1 = 3 Q / r^5 - 4 pi W / r^2 = wendlandC1(q) / a^5,
+// and its Jacobian 4 pi dH_d/dx_e = c1 (delta_de (r . m) + r_d m_e + m_d r_e) - c3 r_d r_e (r . m)
+// with c3 = -(dc1/dr) / r = (420 / q - 720 + 315 q) / a^7. All three equal the point
+// dipole's 1/r^3, 3/r^5, 15/r^7 at q = 1.
+template <class T>
+inline T wendlandC2(const T& q) { return 14.0f + q * q * (-84.0f + q * (140.0f + q * (-90.0f + 21.0f * q))); }
+template <class T>
+inline T wendlandC1(const T& q) { return 168.0f + q * (-420.0f + q * (360.0f - 105.0f * q)); }
+// c3 a^7 without the 420 / q term (added by the callers as 420 / (r a^6), finite for r > 0).
+template <class T>
+inline T wendlandC3Smooth(const T& q) { return -720.0f + 315.0f * q; }
 
 #ifdef FERRO_DIPOLE_SSE
 // Sources i .. i+3 of s seen from the target t (each coordinate in all four lanes), scaled
@@ -55,9 +79,9 @@ struct SourcePairs4 {
 };
 #endif
 
-// Field sum (without the 1/4pi) at target t from sources [b, e). Inside = apply the
-// uniform-sphere rule for targets within a source's radius (particles); far cells skip it.
-template <bool Inside>
+// Field sum (without the 1/4pi) at target t from sources [b, e). C = how a source's field
+// differs from its point dipole at targets within its core radius (see Core).
+template <Core C>
 inline void fieldKernel(const float t[3], const Sources& s, size_t b, size_t e, float h[3]) {
     size_t i = b;
     float hx = 0, hy = 0, hz = 0;
@@ -70,10 +94,21 @@ inline void fieldKernel(const float t[3], const Sources& s, size_t b, size_t e, 
             const SourcePairs4 p(tv, s, i);
             __m128 c2 = _mm_mul_ps(p.inv2, p.inv);                 // 1/r^3
             __m128 c1 = _mm_mul_ps(_mm_mul_ps(three, c2), p.inv2); // 3/r^5
-            if (Inside) {
+            if (C == Core::Sphere) {
                 const __m128 in = _mm_cmplt_ps(p.r2, _mm_loadu_ps(s.a2 + i));
+                const __m128 ai = _mm_loadu_ps(s.ainv + i);
                 c1 = _mm_andnot_ps(in, c1);
-                c2 = _mm_or_ps(_mm_and_ps(in, _mm_loadu_ps(s.ai3 + i)), _mm_andnot_ps(in, c2));
+                c2 = _mm_or_ps(_mm_and_ps(in, _mm_mul_ps(_mm_mul_ps(ai, ai), ai)), _mm_andnot_ps(in, c2));
+            } else if (C == Core::Wendland) {
+                const __m128 in = _mm_cmplt_ps(p.r2, _mm_loadu_ps(s.a2 + i));
+                if (_mm_movemask_ps(in)) {
+                    const v4sf ai = (v4sf)_mm_loadu_ps(s.ainv + i);
+                    const v4sf q = (v4sf)_mm_mul_ps(_mm_mul_ps(p.r2, p.inv), (__m128)ai);
+                    const v4sf ai3 = ai * ai * ai, ai5 = ai3 * ai * ai;
+                    const __m128 w2 = (__m128)(wendlandC2(q) * ai3), w1 = (__m128)(wendlandC1(q) * ai5);
+                    c1 = _mm_or_ps(_mm_and_ps(in, w1), _mm_andnot_ps(in, c1));
+                    c2 = _mm_or_ps(_mm_and_ps(in, w2), _mm_andnot_ps(in, c2));
+                }
             }
             const __m128 k = _mm_mul_ps(c1, p.dot);
             ax = _mm_add_ps(ax, _mm_sub_ps(_mm_mul_ps(k, p.dx), _mm_mul_ps(c2, p.mx)));
@@ -94,9 +129,16 @@ inline void fieldKernel(const float t[3], const Sources& s, size_t b, size_t e, 
         const float r2 = dx * dx + dy * dy + dz * dz;
         const float inv = 1.0f / std::sqrt(std::max(r2, kMinR2));
         float c2 = inv * inv * inv, c1 = 3.0f * c2 * inv * inv;
-        if (Inside && r2 < s.a2[i]) {
-            c1 = 0;
-            c2 = s.ai3[i];
+        if (C != Core::Point && r2 < s.a2[i]) {
+            const float ai = s.ainv[i], ai3 = ai * ai * ai;
+            if (C == Core::Sphere) {
+                c1 = 0;
+                c2 = ai3;
+            } else {
+                const float q = r2 * inv * ai;
+                c1 = wendlandC1(q) * ai3 * ai * ai;
+                c2 = wendlandC2(q) * ai3;
+            }
         }
         const float dot = dx * s.mx[i] + dy * s.my[i] + dz * s.mz[i];
         hx += c1 * dot * dx - c2 * s.mx[i];
@@ -109,8 +151,9 @@ inline void fieldKernel(const float t[3], const Sources& s, size_t b, size_t e, 
 }
 
 // Gradient sum (without 1/4pi) at t from sources [b, e): g = xx, yy, zz, xy, xz, yz.
-// Sources whose sphere contains t contribute nothing (uniform field inside).
-template <bool Inside>
+// Sphere: sources whose sphere contains t contribute nothing (uniform field inside);
+// Wendland: the smoothed dipole's Jacobian within the support.
+template <Core C>
 inline void gradientKernel(const float t[3], const Sources& s, size_t b, size_t e, float g[6]) {
     float acc[6] = {0, 0, 0, 0, 0, 0};
     size_t i = b;
@@ -124,8 +167,23 @@ inline void gradientKernel(const float t[3], const Sources& s, size_t b, size_t 
             const SourcePairs4 p(tv, s, i);
             const __m128 dx = p.dx, dy = p.dy, dz = p.dz, mx = p.mx, my = p.my, mz = p.mz, dot = p.dot;
             __m128 c5 = _mm_mul_ps(three, _mm_mul_ps(_mm_mul_ps(p.inv2, p.inv2), p.inv)); // 3/r^5
-            if (Inside) c5 = _mm_andnot_ps(_mm_cmplt_ps(p.r2, _mm_loadu_ps(s.a2 + i)), c5);
-            const __m128 c7 = _mm_mul_ps(five, _mm_mul_ps(c5, p.inv2)); // 15/r^7 (0 inside)
+            __m128 c7 = _mm_mul_ps(five, _mm_mul_ps(c5, p.inv2));                           // 15/r^7
+            if (C == Core::Sphere) {
+                const __m128 out = _mm_cmpge_ps(p.r2, _mm_loadu_ps(s.a2 + i));
+                c5 = _mm_and_ps(out, c5);
+                c7 = _mm_and_ps(out, c7);
+            } else if (C == Core::Wendland) {
+                const __m128 in = _mm_cmplt_ps(p.r2, _mm_loadu_ps(s.a2 + i));
+                if (_mm_movemask_ps(in)) {
+                    const v4sf ai = (v4sf)_mm_loadu_ps(s.ainv + i);
+                    const v4sf q = (v4sf)_mm_mul_ps(_mm_mul_ps(p.r2, p.inv), (__m128)ai);
+                    const v4sf ai2 = ai * ai, ai3 = ai2 * ai, ai6 = ai3 * ai3;
+                    const __m128 w5 = (__m128)(wendlandC1(q) * ai3 * ai2);
+                    const __m128 w7 = (__m128)(420.0f * (v4sf)p.inv * ai6 + wendlandC3Smooth(q) * ai6 * ai);
+                    c5 = _mm_or_ps(_mm_and_ps(in, w5), _mm_andnot_ps(in, c5));
+                    c7 = _mm_or_ps(_mm_and_ps(in, w7), _mm_andnot_ps(in, c7));
+                }
+            }
             const __m128 tt = _mm_mul_ps(c5, dot), u = _mm_mul_ps(c7, dot);
             const __m128 c52 = _mm_mul_ps(two, c5);
             a[0] = _mm_add_ps(a[0], _mm_sub_ps(_mm_add_ps(tt, _mm_mul_ps(c52, _mm_mul_ps(dx, mx))), _mm_mul_ps(u, _mm_mul_ps(dx, dx))));
@@ -145,11 +203,16 @@ inline void gradientKernel(const float t[3], const Sources& s, size_t b, size_t 
     for (; i < e; ++i) {
         const float dx = t[0] - s.x[i], dy = t[1] - s.y[i], dz = t[2] - s.z[i];
         const float r2 = dx * dx + dy * dy + dz * dz;
-        if (Inside && r2 < s.a2[i]) continue;
+        if (C == Core::Sphere && r2 < s.a2[i]) continue;
         const float inv = 1.0f / std::sqrt(std::max(r2, kMinR2));
         const float inv2 = inv * inv;
-        const float c5 = 3.0f * inv2 * inv2 * inv; // 3/r^5
-        const float c7 = 5.0f * c5 * inv2;         // 15/r^7
+        float c5 = 3.0f * inv2 * inv2 * inv; // 3/r^5
+        float c7 = 5.0f * c5 * inv2;         // 15/r^7
+        if (C == Core::Wendland && r2 < s.a2[i]) {
+            const float ai = s.ainv[i], q = r2 * inv * ai, ai3 = ai * ai * ai, ai6 = ai3 * ai3;
+            c5 = wendlandC1(q) * ai3 * ai * ai;
+            c7 = 420.0f * inv * ai6 + wendlandC3Smooth(q) * ai6 * ai;
+        }
         const float mx = s.mx[i], my = s.my[i], mz = s.mz[i];
         const float dot = dx * mx + dy * my + dz * mz;
         const float tt = c5 * dot, u = c7 * dot;
@@ -321,7 +384,8 @@ inline void cellGradient(const T& x, const T& y, const T& z, const T& inv, const
 //   add(x, y, z, inv, mom, out): adds 4 pi times one far cell's contribution at offset
 //     r = (x, y, z) = target - centre, inv = 1/|r|, from the kCellFloats moments `mom`
 //     (RawMoments::storeTraceFree layout);
-//   addParticles(t, s, b, e, out): adds 4 pi times the exact sum of particles [b, e) of s at t.
+//   addParticles(core, t, s, b, e, out): adds 4 pi times the exact sum of particles [b, e)
+//     of s at t, with their cores of kind `core` (Sphere or Wendland).
 template <bool Gradient>
 struct TreeTerm {
     static constexpr int kOut = Gradient ? 6 : 3;
@@ -330,9 +394,14 @@ struct TreeTerm {
         if constexpr (Gradient) cellGradient(x, y, z, inv, mom, mom + 3, mom + 9, out);
         else cellField(x, y, z, inv, mom, mom + 3, mom + 9, out);
     }
-    static void addParticles(const float t[3], const Sources& s, size_t b, size_t e, float* out) {
-        if constexpr (Gradient) gradientKernel<true>(t, s, b, e, out);
-        else fieldKernel<true>(t, s, b, e, out);
+    static void addParticles(Core core, const float t[3], const Sources& s, size_t b, size_t e, float* out) {
+        if constexpr (Gradient) {
+            if (core == Core::Wendland) gradientKernel<Core::Wendland>(t, s, b, e, out);
+            else gradientKernel<Core::Sphere>(t, s, b, e, out);
+        } else {
+            if (core == Core::Wendland) fieldKernel<Core::Wendland>(t, s, b, e, out);
+            else fieldKernel<Core::Sphere>(t, s, b, e, out);
+        }
     }
 };
 using FieldTerm = TreeTerm<false>;
@@ -343,7 +412,6 @@ using GradientTerm = TreeTerm<true>;
 constexpr int kFarArrays = 3 + kCellFloats;
 
 #ifdef FERRO_DIPOLE_SSE
-typedef float v4sf __attribute__((vector_size(16)));
 inline v4sf load4(const float* p) { return (v4sf)_mm_loadu_ps(p); }
 inline v4sf invSqrt4(v4sf r2) {
     return (v4sf)_mm_div_ps(_mm_set1_ps(1.0f), _mm_sqrt_ps(_mm_max_ps((__m128)r2, _mm_set1_ps(kMinR2))));
@@ -457,7 +525,7 @@ void DipoleTree::build(const std::vector<Vec3>& x, const std::vector<Real>& volu
         order_[k] = keys[k].second;
         codes[k] = keys[k].first;
     }
-    for (auto* v : {&px_, &py_, &pz_, &a2_, &ainv3_, &vol_, &mx_, &my_, &mz_}) v->assign(n, 0.0f);
+    for (auto* v : {&px_, &py_, &pz_, &a2_, &ainv_, &vol_, &mx_, &my_, &mz_}) v->assign(n, 0.0f);
     const double inv = 1.0 / scale_;
     for (size_t k = 0; k < n; ++k) {
         const size_t i = order_[k];
@@ -467,9 +535,10 @@ void DipoleTree::build(const std::vector<Vec3>& x, const std::vector<Real>& volu
         pz_[k] = float(p.z());
         const double v = vol(i) * inv * inv * inv;
         vol_[k] = float(v);
-        const double a = std::cbrt(3.0 * v / (4.0 * kPi));
+        // Core radius: the sphere of volume v, or the smoothing kernel's support.
+        const double a = smoothing_ > 0 ? smoothing_ * std::cbrt(v) : std::cbrt(3.0 * v / (4.0 * kPi));
         a2_[k] = float(a * a);
-        ainv3_[k] = a > 0 ? float(1.0 / (a * a * a)) : 0.0f;
+        ainv_[k] = a > 0 ? float(1.0 / a) : 0.0f;
     }
 
     nodes_.clear();
@@ -490,6 +559,9 @@ void DipoleTree::build(const std::vector<Vec3>& x, const std::vector<Real>& volu
     nearStart_.assign(1, 0);
     farCells_.clear();
     nearRanges_.clear();
+    surfaceWeight_.clear();
+    surfaceNormal_.clear();
+    if (coreOf(smoothing_) == Core::Wendland) computeSurfaceTerms();
     if (theta_ > 0 && n > 0) buildInteractionLists();
 }
 
@@ -713,9 +785,9 @@ void DipoleTree::treeSum(size_t leaf, size_t k, const std::vector<float>& buf, s
     const float t[3] = {px_[k], py_[k], pz_[k]};
     farSum<Term>(t, buf.data(), farCount, out);
     const Sources near{px_.data(), py_.data(), pz_.data(), mx_.data(), my_.data(), mz_.data(), a2_.data(),
-                       ainv3_.data()};
+                       ainv_.data()};
     for (uint32_t q = nearStart_[leaf]; q < nearStart_[leaf + 1]; q += 2)
-        Term::addParticles(t, near, nearRanges_[q], nearRanges_[q + 1], out);
+        Term::addParticles(coreOf(smoothing_), t, near, nearRanges_[q], nearRanges_[q + 1], out);
 }
 
 template <class Visit>
@@ -736,6 +808,78 @@ void DipoleTree::treeFieldAt(size_t leaf, size_t k, const std::vector<float>& bu
     float acc[3] = {0, 0, 0};
     treeSum<FieldTerm>(leaf, k, buf, farCount, acc);
     for (int a = 0; a < 3; ++a) h[a] = kInv4Pi * double(acc[a]);
+    addSurfaceTerm(k, h);
+}
+
+void DipoleTree::addSurfaceTerm(size_t k, double h[3]) const {
+    if (surfaceWeight_.empty() || !(surfaceWeight_[k] > 0) || !(vol_[k] > 0)) return;
+    const float* nk = &surfaceNormal_[3 * k];
+    // M = moment / volume (both in scaled units: A/m).
+    const double mn = (double(mx_[k]) * nk[0] + double(my_[k]) * nk[1] + double(mz_[k]) * nk[2]) / vol_[k];
+    for (int a = 0; a < 3; ++a) h[a] -= double(surfaceWeight_[k]) * mn * nk[a];
+}
+
+void DipoleTree::computeSurfaceTerms() {
+    // n_k = sum_j V_j W_j(x_k - x_j), the filled fraction of particle k's kernel (1 inside
+    // the fluid), and its gradient. Targets are grouped by leaf: one range search of the
+    // octree per leaf (cells whose box is within the largest support of the leaf's box),
+    // then every target of the leaf runs over those candidates. Outward normal = -grad n.
+    const size_t n = size();
+    surfaceWeight_.assign(n, 0.0f);
+    surfaceNormal_.assign(3 * n, 0.0f);
+    if (n == 0 || nodes_.empty()) return;
+    const float reach = nodes_[0].maxA; // largest support
+    auto boxGap = [](const Node& a, const Node& b) {
+        double d2 = 0;
+        for (int k = 0; k < 3; ++k) {
+            const double g = std::max({0.0, double(a.lo[k]) - b.hi[k], double(b.lo[k]) - a.hi[k]});
+            d2 += g * g;
+        }
+        return std::sqrt(d2);
+    };
+    tbb::parallel_for(tbb::blocked_range<size_t>(0, leaves_.size(), 4), [&](const tbb::blocked_range<size_t>& r) {
+        std::vector<uint32_t> stack, ranges;
+        for (size_t l = r.begin(); l < r.end(); ++l) {
+            const Node& target = nodes_[leaves_[l]];
+            ranges.clear();
+            stack.assign(1, 0);
+            while (!stack.empty()) {
+                const Node& node = nodes_[stack.back()];
+                stack.pop_back();
+                if (boxGap(node, target) >= reach) continue;
+                if (node.childCount > 0) {
+                    for (uint32_t c = 0; c < node.childCount; ++c) stack.push_back(node.firstChild + c);
+                } else {
+                    ranges.push_back(node.begin);
+                    ranges.push_back(node.end);
+                }
+            }
+            for (uint32_t k = target.begin; k < target.end; ++k) {
+                const float px = px_[k], py = py_[k], pz = pz_[k];
+                double dens = 0, grad[3] = {0, 0, 0};
+                for (size_t q = 0; q < ranges.size(); q += 2)
+                    for (uint32_t j = ranges[q]; j < ranges[q + 1]; ++j) {
+                        const float dx = px - px_[j], dy = py - py_[j], dz = pz - pz_[j];
+                        const float r2 = dx * dx + dy * dy + dz * dz;
+                        if (!(r2 < a2_[j])) continue;
+                        const float ai = ainv_[j], rr = std::sqrt(r2), qq = rr * ai, u = 1 - qq;
+                        const float c = float(21.0 / (2.0 * kPi)) * ai * ai * ai * vol_[j];
+                        dens += c * u * u * u * u * (1 + 4 * qq);
+                        if (rr > 0) {
+                            const float dW = -20.0f * c * ai * qq * u * u * u / rr; // (dW/dr) / r
+                            grad[0] += dW * dx;
+                            grad[1] += dW * dy;
+                            grad[2] += dW * dz;
+                        }
+                    }
+                const double g = std::sqrt(grad[0] * grad[0] + grad[1] * grad[1] + grad[2] * grad[2]);
+                if (dens < 1 && g > 0) {
+                    surfaceWeight_[k] = float(1 - dens);
+                    for (int a = 0; a < 3; ++a) surfaceNormal_[3 * k + a] = float(-grad[a] / g);
+                }
+            }
+        }
+    });
 }
 
 void DipoleTree::fieldAtParticles(Eigen::VectorXd& H, bool useTree) const {
@@ -743,7 +887,7 @@ void DipoleTree::fieldAtParticles(Eigen::VectorXd& H, bool useTree) const {
     H.setZero(3 * Eigen::Index(n));
     if (n == 0) return;
     const Sources src{px_.data(), py_.data(), pz_.data(), mx_.data(), my_.data(), mz_.data(), a2_.data(),
-                      ainv3_.data()};
+                      ainv_.data()};
     if (useTree && theta_ > 0) {
         forEachTreeTarget([&](size_t l, size_t k, const std::vector<float>& buf, size_t farCount) {
             treeFieldAt(l, k, buf, farCount, &H[3 * k]);
@@ -759,10 +903,11 @@ void DipoleTree::fieldAtParticles(Eigen::VectorXd& H, bool useTree) const {
                 for (size_t k = tb; k < te; ++k) {
                     const float t[3] = {px_[k], py_[k], pz_[k]};
                     float acc[3] = {0, 0, 0};
-                    fieldKernel<true>(t, src, sb, se, acc);
+                    FieldTerm::addParticles(coreOf(smoothing_), t, src, sb, se, acc);
                     for (int a = 0; a < 3; ++a) H[3 * k + a] += kInv4Pi * double(acc[a]);
                 }
             }
+            for (size_t k = tb; k < te; ++k) addSurfaceTerm(k, &H[3 * k]);
         }
     });
 }
@@ -771,16 +916,17 @@ void DipoleTree::fieldAtParticlesDirect(const std::vector<uint32_t>& targets, Ei
     const size_t n = size();
     H.setZero(3 * Eigen::Index(targets.size()));
     const Sources src{px_.data(), py_.data(), pz_.data(), mx_.data(), my_.data(), mz_.data(), a2_.data(),
-                      ainv3_.data()};
+                      ainv_.data()};
     tbb::parallel_for(tbb::blocked_range<size_t>(0, targets.size(), 8), [&](const tbb::blocked_range<size_t>& r) {
         for (size_t q = r.begin(); q < r.end(); ++q) {
             const size_t k = targets[q];
             const float t[3] = {px_[k], py_[k], pz_[k]};
             for (size_t sb = 0; sb < n; sb += kDirectChunk) {
                 float acc[3] = {0, 0, 0};
-                fieldKernel<true>(t, src, sb, std::min(n, sb + kDirectChunk), acc);
+                FieldTerm::addParticles(coreOf(smoothing_), t, src, sb, std::min(n, sb + kDirectChunk), acc);
                 for (int a = 0; a < 3; ++a) H[3 * q + a] += kInv4Pi * double(acc[a]);
             }
+            addSurfaceTerm(k, &H[3 * q]);
         }
     });
 }
@@ -791,7 +937,7 @@ void DipoleTree::gradientAtParticles(std::vector<Mat3f>& J, bool useTree) const 
     if (n == 0) return;
     const float s = float(kInv4Pi / scale_);
     const Sources src{px_.data(), py_.data(), pz_.data(), mx_.data(), my_.data(), mz_.data(), a2_.data(),
-                      ainv3_.data()};
+                      ainv_.data()};
     if (useTree && theta_ > 0) {
         forEachTreeTarget([&](size_t l, size_t k, const std::vector<float>& buf, size_t farCount) {
             float g[6] = {0, 0, 0, 0, 0, 0};
@@ -806,7 +952,7 @@ void DipoleTree::gradientAtParticles(std::vector<Mat3f>& J, bool useTree) const 
             double gd[6] = {0, 0, 0, 0, 0, 0};
             for (size_t sb = 0; sb < n; sb += kDirectChunk) {
                 float g[6] = {0, 0, 0, 0, 0, 0};
-                gradientKernel<true>(t, src, sb, std::min(n, sb + kDirectChunk), g);
+                GradientTerm::addParticles(coreOf(smoothing_), t, src, sb, std::min(n, sb + kDirectChunk), g);
                 for (int a = 0; a < 6; ++a) gd[a] += g[a];
             }
             const float g[6] = {float(gd[0]), float(gd[1]), float(gd[2]), float(gd[3]), float(gd[4]), float(gd[5])};
@@ -833,37 +979,50 @@ Eigen::Vector3d DipoleTree::fieldAtParticleTree(size_t k) const {
 
 namespace {
 
-// Double-precision field (without 1/4pi) at scaled point p of one source; a2 = 0 for cells.
+// Double-precision field (without 1/4pi) at scaled point p of one particle with core radius
+// a (a2 = a^2, ainv = 1/a; 0 for a particle without volume) of kind `core`.
 inline void addDipoleD(const double p[3], double sx, double sy, double sz, double mx, double my, double mz,
-                       double a2, double ai3, double h[3]) {
+                       double a2, double ainv, Core core, double h[3]) {
     const double dx = p[0] - sx, dy = p[1] - sy, dz = p[2] - sz;
     const double r2 = dx * dx + dy * dy + dz * dz;
+    double c1, c2;
     if (r2 < a2) {
-        h[0] -= ai3 * mx;
-        h[1] -= ai3 * my;
-        h[2] -= ai3 * mz;
-        return;
+        const double ai3 = ainv * ainv * ainv;
+        if (core == Core::Wendland) {
+            const double q = std::sqrt(r2) * ainv;
+            c1 = wendlandC1(q) * ai3 * ainv * ainv;
+            c2 = wendlandC2(q) * ai3;
+        } else {
+            c1 = 0;
+            c2 = ai3;
+        }
+    } else {
+        if (!(r2 > 0)) return; // zero-volume source exactly at p: no moment
+        const double inv = 1.0 / std::sqrt(r2);
+        c2 = inv * inv * inv;
+        c1 = 3.0 * c2 * inv * inv;
     }
-    if (!(r2 > 0)) return; // zero-volume source exactly at p: no moment
-    const double inv = 1.0 / std::sqrt(r2);
-    const double inv3 = inv * inv * inv;
-    const double k = 3.0 * inv3 * inv * inv * (dx * mx + dy * my + dz * mz);
-    h[0] += k * dx - inv3 * mx;
-    h[1] += k * dy - inv3 * my;
-    h[2] += k * dz - inv3 * mz;
+    const double k = c1 * (dx * mx + dy * my + dz * mz);
+    h[0] += k * dx - c2 * mx;
+    h[1] += k * dy - c2 * my;
+    h[2] += k * dz - c2 * mz;
 }
 
 inline void addDipoleGradientD(const double p[3], double sx, double sy, double sz, double mx, double my,
-                               double mz, double a2, Mat3d& G) {
+                               double mz, double a2, double ainv, Core core, Mat3d& G) {
     const double dx = p[0] - sx, dy = p[1] - sy, dz = p[2] - sz;
     const double r2 = dx * dx + dy * dy + dz * dz;
-    if (r2 < a2 || !(r2 > 0)) return;
+    if (!(r2 > 0) || (r2 < a2 && core == Core::Sphere)) return;
     const Eigen::Vector3d r(dx, dy, dz), m(mx, my, mz);
-    const double inv2 = 1.0 / r2;
-    const double c5 = 3.0 * inv2 * inv2 * std::sqrt(inv2);
+    const double inv2 = 1.0 / r2, inv = std::sqrt(inv2);
+    double c5 = 3.0 * inv2 * inv2 * inv, c7 = 5.0 * c5 * inv2; // 3/r^5, 15/r^7
+    if (r2 < a2) {
+        const double q = r2 * inv * ainv, ai3 = ainv * ainv * ainv, ai6 = ai3 * ai3;
+        c5 = wendlandC1(q) * ai3 * ainv * ainv;
+        c7 = 420.0 * inv * ai6 + wendlandC3Smooth(q) * ai6 * ainv;
+    }
     const double dot = r.dot(m);
-    G += c5 * (dot * Mat3d::Identity() + r * m.transpose() + m * r.transpose()) -
-         (5.0 * c5 * inv2 * dot) * (r * r.transpose());
+    G += c5 * (dot * Mat3d::Identity() + r * m.transpose() + m * r.transpose()) - (c7 * dot) * (r * r.transpose());
 }
 
 /// Adds to out[Term::kOut] Term (without 1/4pi) of one far cell with centre c and moments
@@ -878,9 +1037,10 @@ void cellSumD(const double p[3], const float c[3], const float* mom, double out[
 
 /// Exact double sum (without 1/4pi) of the field of all particles `s` [0, n) at the scaled
 /// point p, in sorted order.
-Eigen::Vector3d directFieldD(const double p[3], const Sources& s, size_t n) {
+Eigen::Vector3d directFieldD(const double p[3], const Sources& s, size_t n, Core core) {
     double h[3] = {0, 0, 0};
-    for (size_t j = 0; j < n; ++j) addDipoleD(p, s.x[j], s.y[j], s.z[j], s.mx[j], s.my[j], s.mz[j], s.a2[j], s.ai3[j], h);
+    for (size_t j = 0; j < n; ++j)
+        addDipoleD(p, s.x[j], s.y[j], s.z[j], s.mx[j], s.my[j], s.mz[j], s.a2[j], s.ainv[j], core, h);
     return Eigen::Vector3d(h[0], h[1], h[2]);
 }
 
@@ -889,16 +1049,18 @@ Eigen::Vector3d directFieldD(const double p[3], const Sources& s, size_t n) {
 Eigen::Vector3d DipoleTree::fieldAtParticleDirect(size_t k) const {
     const double p[3] = {px_[k], py_[k], pz_[k]};
     const Sources src{px_.data(), py_.data(), pz_.data(), mx_.data(), my_.data(), mz_.data(), a2_.data(),
-                      ainv3_.data()};
-    return kInv4Pi * directFieldD(p, src, size());
+                      ainv_.data()};
+    Eigen::Vector3d h = kInv4Pi * directFieldD(p, src, size(), coreOf(smoothing_));
+    addSurfaceTerm(k, h.data());
+    return h;
 }
 
 Eigen::Vector3d DipoleTree::fieldAtDirect(const Eigen::Vector3d& point) const {
     const Eigen::Vector3d q = (point - origin_) / scale_;
     const double p[3] = {q.x(), q.y(), q.z()};
     const Sources src{px_.data(), py_.data(), pz_.data(), mx_.data(), my_.data(), mz_.data(), a2_.data(),
-                      ainv3_.data()};
-    return kInv4Pi * directFieldD(p, src, size());
+                      ainv_.data()};
+    return kInv4Pi * directFieldD(p, src, size(), coreOf(smoothing_));
 }
 
 template <class Leaf, class Cell>
@@ -927,7 +1089,7 @@ Eigen::Vector3d DipoleTree::fieldAt(const Eigen::Vector3d& point) const {
         q,
         [&](uint32_t b, uint32_t e) {
             for (uint32_t j = b; j < e; ++j)
-                addDipoleD(p, px_[j], py_[j], pz_[j], mx_[j], my_[j], mz_[j], a2_[j], ainv3_[j], h);
+                addDipoleD(p, px_[j], py_[j], pz_[j], mx_[j], my_[j], mz_[j], a2_[j], ainv_[j], coreOf(smoothing_), h);
         },
         [&](uint32_t c) {
             cellSumD<FieldTerm>(p, nodes_[c].c, &cell_[size_t(c) * kCellFloats], h);
@@ -943,7 +1105,7 @@ Mat3d DipoleTree::gradientAt(const Eigen::Vector3d& point) const {
         q,
         [&](uint32_t b, uint32_t e) {
             for (uint32_t j = b; j < e; ++j)
-                addDipoleGradientD(p, px_[j], py_[j], pz_[j], mx_[j], my_[j], mz_[j], a2_[j], G);
+                addDipoleGradientD(p, px_[j], py_[j], pz_[j], mx_[j], my_[j], mz_[j], a2_[j], ainv_[j], coreOf(smoothing_), G);
         },
         [&](uint32_t c) {
             double g[6] = {0, 0, 0, 0, 0, 0};

@@ -79,6 +79,10 @@ MagnetizationParams parseMagnetization(const SceneDocument& doc)
     p.openingAngle = r.number("opening_angle", p.openingAngle);
     if (!(p.openingAngle > 0 && p.openingAngle < 1.5))
         r.fail("opening_angle", "must be in (0, 1.5) (got " + formatNumber(p.openingAngle) + ")");
+    p.smoothing = r.number("smoothing", p.smoothing);
+    if (!(p.smoothing == 0 || (p.smoothing >= 1 && p.smoothing <= 6)))
+        r.fail("smoothing", "must be 0 (uniformly magnetized spheres) or in [1, 6] particle spacings (got " +
+                                formatNumber(p.smoothing) + ")");
     p.resolveEvery = r.integerInRange("resolve_every", p.resolveEvery, 0, INT_MAX);
     p.maxIterations = r.integerInRange("max_iterations", p.maxIterations, 1, 10000);
     if (r.has("induced_force"))

@@ -137,6 +137,9 @@ void magnetizationOf(const VecX& H, double chi0, double Ms, VecX& M) {
 
 } // namespace
 
+static_assert(MagnetizationParams{}.smoothing == DipoleTree::kDefaultSmoothing,
+              "the solver's and the evaluator's default particle model must agree");
+
 MagnetizationSolver::MagnetizationSolver(const MagnetizationParams& params) : params_(params) {}
 
 void MagnetizationSolver::solveSelfConsistent(DipoleTree& tree, bool useTree, const VecX& Hext, VecX& H,
@@ -210,6 +213,7 @@ void MagnetizationSolver::solveSelfConsistent(DipoleTree& tree, bool useTree, co
             break;
         }
     }
+    stats.converged = stats.residual * extNorm <= target * (1 + 1e-9);
 }
 
 MagnetizationSolver::Stats MagnetizationSolver::solve(const std::vector<Vec3>& x, const std::vector<Real>& volume,
@@ -244,6 +248,7 @@ MagnetizationSolver::Stats MagnetizationSolver::solve(const std::vector<Vec3>& x
     double theta = params_.openingAngle > 0 ? params_.openingAngle : 0.5;
 
     DipoleTree tree; // Auto builds the interaction lists only once it has picked Tree
+    tree.setSmoothing(params_.smoothing);
     tree.build(x, volume, solver == Solver::Tree ? theta : 0.0);
     const std::vector<uint32_t>& order = tree.order();
 
@@ -387,6 +392,7 @@ void MagnetizationSolver::fieldGradient(const std::vector<Vec3>& x, const std::v
     }
     const bool useTree = kind == Solver::Tree;
     DipoleTree tree;
+    tree.setSmoothing(params_.smoothing);
     tree.build(x, volume, useTree ? (params_.openingAngle > 0 ? params_.openingAngle : 0.5) : 0.0);
     tree.setMagnetizationUnsorted(M);
     std::vector<Mat3f> Js;
@@ -398,8 +404,11 @@ void MagnetizationSolver::fieldGradient(const std::vector<Vec3>& x, const std::v
 // Evaluator
 
 void ParticleFieldEvaluator::build(const std::vector<Vec3>& x, const std::vector<Real>& volume,
-                                   const std::vector<Vec3>& M, double openingAngle) {
+                                   const std::vector<Vec3>& M, double openingAngle, double smoothing) {
+    tree_.setSmoothing(smoothing);
     tree_.build(x, volume, openingAngle);
+    sorted_.assign(x.size(), 0);
+    for (size_t k = 0; k < tree_.order().size(); ++k) sorted_[tree_.order()[k]] = uint32_t(k);
     tree_.setMagnetizationUnsorted(M);
 }
 

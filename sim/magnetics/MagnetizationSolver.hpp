@@ -2,35 +2,41 @@
 // Self-consistent magnetization of the ferrofluid particles (paper eq. 5 with Langevin
 // saturation) and the total magnetic field they feel.
 //
-// Model. Each particle i is a uniformly magnetized sphere of its volume V_i (see
-// sim/magnetics/DipoleTree.hpp for the discretization and why it gives the macroscopic field). The
-// field at particle i is
-//     H_i = H_ext(x_i) + sum_j G(x_i - x_j) V_j M_j        (j = i included: -M_i / 3)
+// Model. Each particle i carries the moment V_i M_i spread over a Wendland C2 kernel of
+// support MagnetizationParams::smoothing * V_i^(1/3) (smoothed dipoles; smoothing = 0: a
+// uniformly magnetized sphere of volume V_i, the older model). sim/magnetics/DipoleTree.hpp
+// has the closed-form field, why it gives the macroscopic field on disordered particle sets
+// and the surface term S_i. The field at particle i is
+//     H_i = H_ext(x_i) + sum_j G(x_i - x_j) V_j M_j - S_i M_i   (j = i included: -W(0) V_i M_i / 3)
 // and the fluid follows the Langevin law along the local field,
 //     M_i = M(|H_i|) H_i / |H_i|,   M(H) = Ms (coth xi - 1/xi),  xi = 3 chi0 H / Ms,
 // linear M = chi0 H when Ms = 0. The solver finds H (and M) satisfying both.
 //
 // Numerics. Newton's method on R(H) = H - H_ext - A M(H) (A = the particle field operator),
-// each Newton step a restarted GMRES on (I - A dM/dH) dH = -R: the operator's spectrum is
-// in about [1, 1 + chi], so Krylov converges in a handful of field evaluations where plain
-// Jacobi iteration diverges for chi > ~2. For Ms = 0 one Newton step is exact. The solve
-// stops when |R| / |H_ext| <= 0.1 * tolerance (2-norms over all particles) or after
-// maxIterations field evaluations. A warm start (H from the previous solve) cuts the work
-// to what the particles' and magnets' motion changed.
+// each Newton step a restarted GMRES on (I - A dM/dH) dH = -R. With smoothed dipoles -A is
+// positive semidefinite for any particle positions (the kernel's Fourier transform is
+// positive, the surface term is a local semidefinite block; exactly so for equal volumes) and dM/dH is symmetric positive
+// (semi)definite, so the operator's spectrum is in [1, 1 + chi |A|]: Krylov converges in a
+// handful of field evaluations where plain Jacobi iteration diverges for chi > ~2. For
+// Ms = 0 one Newton step is exact. The solve stops when |R| / |H_ext| <= 0.1 * tolerance
+// (2-norms over all particles; Stats::converged) or after maxIterations field evaluations
+// (Stats::converged false: H is the last iterate, Stats::residual says how far it got). A
+// warm start (H from the previous solve) cuts the work to what the particles' and magnets'
+// motion changed.
 //
 // Solvers (MagnetizationParams::solver):
 //   External  M = M(H_ext) alone, O(N); error ~ the neglected particle field (~chi/(1+chi)).
 //   Direct    exact all-pairs products, O(N^2) per field evaluation: the reference.
 //   Tree      Barnes-Hut products (sim/magnetics/DipoleTree.hpp), opening angle theta = cell size /
-//             distance; at the default 0.5 the field is within ~0.2 % RMS of Direct on a
-//             40,960-particle dish layer at ~1/25 of its cost (bench-magnetization).
+//             distance; at the default 0.5 see bench-magnetization for its error and speed
+//             against Direct on a 40,960-particle dish layer.
 //   Auto      External if its sampled error is under `tolerance`, else Direct up to
 //             directLimit() particles, else Tree (theta tightened, warm-started, up to twice
 //             if the sampled tree error exceeds the tolerance). Stats::solver says which.
 // A typical solve takes ~9 field evaluations cold and ~4 warm-started after a small step
-// (chi0 ~ 1.5); ~12-15 at chi0 = 5. Far larger linear susceptibilities (chi0 >~ 20) converge
-// slowly: the point-dipole field of close particle pairs makes the system indefinite; the
-// result stays finite and Stats::residual says how far it got.
+// (chi0 ~ 1.5); 11-13 for a ball at linear chi0 = 10, settled or 0.2-jittered (tests). The
+// sphere model (smoothing = 0) is indefinite on disordered sets: it stalls at its iteration
+// cap with a ~2e-2 residual at chi0 >= 3 on a jittered ball.
 //
 // Units: SI throughout (A/m, m, m^3); positions and results float, internals double.
 #include "sim/magnetics/DipoleTree.hpp"
@@ -76,6 +82,10 @@ public:
         int iterations = 0;       ///< particle-field evaluations (GMRES matrix-vector products + residuals)
         int newtonSteps = 0;      ///< outer (Newton) steps
         double residual = 0;      ///< final |H - H_ext - A M| / |H_ext| (2-norms; 0 for External)
+        /// The self-consistent solve reached its target residual (0.1 * tolerance) within
+        /// maxIterations; false means H is the best iterate found, off by about `residual`.
+        /// Always true for External and skipped solves (nothing to iterate).
+        bool converged = true;
         /// Estimated relative RMS error of H against the converged all-pairs solution:
         /// External: RMS of the neglected particle field / RMS H_ext (sampled);
         /// Tree: sampled tree-vs-exact field difference / RMS H, plus the residual;
@@ -102,8 +112,8 @@ public:
                 std::vector<Vec3>& H, std::vector<Vec3>& M, std::vector<Eigen::Matrix3f>* J = nullptr);
 
     /// J[i](a, b) = dH_a / dx_b [A/m^2] of the TOTAL field at particle i: the magnets'
-    /// analytic Jacobian plus the field of all other particles with magnetization M (as
-    /// solved). The particle part follows the solver: Tree -> tree (opening angle of the
+    /// analytic Jacobian plus that of the particles' field with magnetization M (as solved),
+    /// from the same smoothed kernels (bounded; the surface term is not differentiated). The particle part follows the solver: Tree -> tree (opening angle of the
     /// params), Direct -> exact all pairs, External -> none (its model neglects the particle
     /// field), Auto -> what the last solve() picked (before any solve: Tree above
     /// directLimit() particles, else Direct). The Kelvin force on particle i is
@@ -129,19 +139,25 @@ private:
 
 /// Total or induced field anywhere from a saved particle state (positions, volumes, M as
 /// written to the particle files) plus the magnets: what ferro-spikes needs at surface
-/// points. The particle field uses the same spheres model and tree as the solver, so at a
-/// particle centre inducedField() + magnetField() reproduces the solver's H.
+/// points. The particle field uses the same particle model (smoothed dipoles or spheres) and
+/// tree as the solver: inducedField() is the field of the smoothed magnetization at any
+/// point; at particle i the solver's H is inducedFieldAtParticle(i) + magnetField(), which
+/// adds the surface sampling term of DipoleTree.hpp (zero inside the fluid).
 class ParticleFieldEvaluator {
 public:
     /// Builds the tree. openingAngle 0 = exact sums (O(N) per point), default 0.5.
+    /// smoothing: the particle model, as MagnetizationParams::smoothing (pass the solver's).
     void build(const std::vector<Vec3>& x, const std::vector<Real>& volume, const std::vector<Vec3>& M,
-               double openingAngle = 0.5);
+               double openingAngle = 0.5, double smoothing = DipoleTree::kDefaultSmoothing);
     /// Field of the magnetized particles at p [m] -> [A/m].
     Vec3d inducedField(const Vec3d& p) const { return tree_.fieldAt(p); }
     /// Jacobian dH_a/dx_b [A/m^2] of the particle field at p.
     Mat3d inducedGradient(const Vec3d& p) const { return tree_.gradientAt(p); }
     /// Exact all-particle sum at p (reference, O(N)).
     Vec3d inducedFieldExact(const Vec3d& p) const { return tree_.fieldAtDirect(p); }
+    /// The particle field the solver uses at particle i (index into build()'s x): exact sum,
+    /// O(N), including the surface sampling term.
+    Vec3d inducedFieldAtParticle(size_t i) const { return tree_.fieldAtParticleDirect(sorted_[i]); }
     size_t size() const { return tree_.size(); }
     /// Total moment sum V M [A m^2] and volume centroid [m]: the far field is that dipole.
     Vec3d totalMoment() const { return tree_.totalMoment(); }
@@ -149,6 +165,7 @@ public:
 
 private:
     DipoleTree tree_;
+    std::vector<uint32_t> sorted_; // sorted_[i] = tree place of input particle i
 };
 
 /// H [A/m] at p: magnets plus magnetized particles.

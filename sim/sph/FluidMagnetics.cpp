@@ -172,6 +172,8 @@ void FluidMagnetics::solve(const std::vector<Vec3>& x, bool forced) {
     stats_.solver = solverName(st.solver);
     stats_.iterations = st.iterations;
     stats_.estimatedError = st.fieldError;
+    stats_.converged = stats_.converged && st.converged;
+    stats_.residual = std::max(stats_.residual, st.residual);
 }
 
 void FluidMagnetics::update(double t, const std::vector<Vec3>& x, const std::vector<Vec3>& colorGradient,

@@ -69,6 +69,8 @@ struct MagneticsStats {
     std::string solver;      ///< the solver the last solve used ("external", "direct", "tree")
     int iterations = 0;      ///< iterations of the last solve
     double estimatedError = 0; ///< the last solve's estimated relative field error
+    bool converged = true;     ///< every solve since the reset reached its tolerance
+    double residual = 0;       ///< largest relative residual of the solves since the reset
     double cacheError = 0;   ///< measured error the cached field had reached, as RMS Kelvin
                              ///< acceleration error relative to gravity / the Kelvin force
 };
@@ -133,7 +135,12 @@ public:
     void setResolveInterval(size_t steps) { interval_ = std::clamp<size_t>(steps, 1, kMaxInterval); }
 
     const MagneticsStats& stats() const { return stats_; }
-    void resetCounters() { stats_.steps = 0; stats_.solves = 0; }
+    void resetCounters() {
+        stats_.steps = 0;
+        stats_.solves = 0;
+        stats_.converged = true;
+        stats_.residual = 0;
+    }
     const MagnetizationParams& law() const { return law_; }
 
 private:

@@ -2,7 +2,11 @@
 // on a ferrofluid layer in a dish over a dipole magnet, for 10,240 / 40,960 / 163,840 particles.
 //
 //   build/bin/bench-magnetization [--threads 2] [--theta 0.5] [--sizes 10240,40960,163840]
-//                                 [--direct-max 40960] [--tolerance 0.01]
+//                                 [--direct-max 40960] [--tolerance 0.01] [--smoothing 2.5]
+//
+// --smoothing: the particle model, MagnetizationParams::smoothing: Wendland C2 smoothed
+// dipoles of support smoothing x spacing (default), 0 = the older uniformly-magnetized-sphere
+// model; run both to compare their cost.
 //
 // The layer: 8 layers of particles at 1.24 mm spacing (about 1 cm deep, the paper's dish),
 // radius growing with N, lattice jittered by 10% of the spacing; oil-based ferrofluid
@@ -80,13 +84,14 @@ const char* name(Solver s) {
 
 int main(int argc, char** argv) {
     int threads = 2;
-    double theta = 0.5, tolerance = 0.01;
+    double theta = 0.5, tolerance = 0.01, smoothing = MagnetizationParams{}.smoothing;
     size_t directMax = 40960;
     std::vector<size_t> sizes{10240, 40960, 163840};
     for (int i = 1; i + 1 < argc; i += 2) {
         if (!std::strcmp(argv[i], "--threads")) threads = std::atoi(argv[i + 1]);
         else if (!std::strcmp(argv[i], "--theta")) theta = std::atof(argv[i + 1]);
         else if (!std::strcmp(argv[i], "--tolerance")) tolerance = std::atof(argv[i + 1]);
+        else if (!std::strcmp(argv[i], "--smoothing")) smoothing = std::atof(argv[i + 1]);
         else if (!std::strcmp(argv[i], "--direct-max")) directMax = size_t(std::atol(argv[i + 1]));
         else if (!std::strcmp(argv[i], "--sizes")) {
             sizes.clear();
@@ -95,7 +100,7 @@ int main(int argc, char** argv) {
             while (std::getline(ss, item, ',')) sizes.push_back(size_t(std::atol(item.c_str())));
         } else {
             std::fprintf(stderr, "usage: bench-magnetization [--threads N] [--theta T] [--tolerance E] "
-                                 "[--sizes a,b,c] [--direct-max N]\n");
+                                 "[--sizes a,b,c] [--direct-max N] [--smoothing S]\n");
             return 2;
         }
     }
@@ -103,11 +108,11 @@ int main(int argc, char** argv) {
     std::string sizeList;
     for (size_t n : sizes) sizeList += (sizeList.empty() ? "" : ",") + std::to_string(n);
     std::printf("bench-magnetization: fluid layer (8 x 1.24 mm) over a 2 A m^2 dipole, chi0 1.5, Ms 30 kA/m, "
-                "%d threads, theta %g, tolerance %g, cold solves\n",
-                threads, theta, tolerance);
+                "%d threads, theta %g, tolerance %g, cold solves, particles: %s\n",
+                threads, theta, tolerance, smoothing > 0 ? "smoothed dipoles" : "uniformly magnetized spheres");
     std::printf("reproduce: build/bin/bench-magnetization --threads %d --theta %g --tolerance %g --sizes %s "
-                "--direct-max %zu\n\n",
-                threads, theta, tolerance, sizeList.c_str(), directMax);
+                "--direct-max %zu --smoothing %g\n\n",
+                threads, theta, tolerance, sizeList.c_str(), directMax, smoothing);
     std::printf("%8s %-9s %-9s %11s %6s %10s %9s %9s %9s %9s\n", "N", "solver", "picked", "ms/solve", "evals",
                 "ms/eval", "err H", "err M", "est.err", "speedup");
 
@@ -129,6 +134,7 @@ int main(int argc, char** argv) {
         p.tolerance = tolerance;
         p.openingAngle = theta;
         p.maxIterations = 100;
+        p.smoothing = smoothing;
 
         std::vector<Vec3> Hd, Md;
         double directMs = 0;
@@ -157,6 +163,7 @@ int main(int argc, char** argv) {
             } else if (kind == Solver::Tree) {
                 // Direct estimated on a subset of targets (see the file comment).
                 DipoleTree exact;
+                exact.setSmoothing(smoothing);
                 exact.build(x, V, 0.0);
                 exact.setMagnetizationUnsorted(M);
                 std::vector<uint32_t> targets;

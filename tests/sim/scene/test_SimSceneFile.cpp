@@ -603,3 +603,12 @@ TEST_CASE("examples/annotated.toml parses", "[scene]")
     CHECK(s.solver.maxDivergenceError == defaults.solver.maxDivergenceError);
     CHECK(s.solver.maxIterations == defaults.solver.maxIterations);
 }
+
+TEST_CASE("magnetization.smoothing selects the particle model", "[scene]")
+{
+    CHECK(scene(kMinimal).magnetization.smoothing == 2.5); // smoothed dipoles by default
+    CHECK(scene(kMinimal + "[magnetization]\nsmoothing = 3\n").magnetization.smoothing == 3.0);
+    CHECK(scene(kMinimal + "[magnetization]\nsmoothing = 0\n").magnetization.smoothing == 0.0); // spheres
+    CHECK_THAT(sceneError(kMinimal + "[magnetization]\nsmoothing = 0.5\n"),
+               Contains("magnetization.smoothing: must be 0 (uniformly magnetized spheres) or in [1, 6]"));
+}
