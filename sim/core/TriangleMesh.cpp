@@ -3,6 +3,7 @@
 #include "sim/core/TriangleMesh.hpp"
 
 #include "sim/core/AtomicFile.hpp"
+#include "sim/core/ErrorText.hpp"
 #include "sim/core/PlyHeader.hpp"
 
 #include <assimp/Exporter.hpp>
@@ -265,10 +266,26 @@ TriangleMesh readWithAssimp(const std::string& path) {
     Assimp::Importer importer;
     // Points and lines are dropped; only triangles describe a surface.
     importer.SetPropertyInteger(AI_CONFIG_PP_SBP_REMOVE, aiPrimitiveType_POINT | aiPrimitiveType_LINE);
-    const aiScene* scene = importer.ReadFile(
-        path, aiProcess_Triangulate | aiProcess_JoinIdenticalVertices | aiProcess_SortByPType |
-                  aiProcess_PreTransformVertices);
-    if (!scene) fail(path, std::string("cannot read mesh: ") + importer.GetErrorString());
+    // Imported and validated first, post-processed after: the steps index the vertices with
+    // the faces' indices as the importer left them (a PLY face index -5 crashed assimp), and
+    // Triangulate aborts the process on a face without indices or when a mesh's primitive
+    // types, which importers set from the declared face sizes, disagree with its faces (PLY
+    // faces of 0 indices did both); they are refused and recomputed here.
+    const aiScene* read = importer.ReadFile(path, aiProcess_ValidateDataStructure);
+    if (!read) fail(path, "cannot read mesh: " + oneLine(importer.GetErrorString()));
+    for (unsigned k = 0; k < read->mNumMeshes; ++k) {
+        aiMesh* m = read->mMeshes[k];
+        m->mPrimitiveTypes = 0;
+        for (unsigned f = 0; f < m->mNumFaces; ++f) {
+            const unsigned n = m->mFaces[f].mNumIndices;
+            if (n == 0) fail(path, "face " + std::to_string(f) + " has no vertex indices");
+            m->mPrimitiveTypes |= n == 1 ? aiPrimitiveType_POINT : n == 2 ? aiPrimitiveType_LINE
+                                : n == 3 ? aiPrimitiveType_TRIANGLE : aiPrimitiveType_POLYGON;
+        }
+    }
+    const aiScene* scene = importer.ApplyPostProcessing(aiProcess_Triangulate | aiProcess_JoinIdenticalVertices |
+                                                        aiProcess_SortByPType | aiProcess_PreTransformVertices);
+    if (!scene) fail(path, "cannot read mesh: " + oneLine(importer.GetErrorString()));
     TriangleMesh mesh;
     bool allNormals = true;
     for (unsigned k = 0; k < scene->mNumMeshes; ++k) allNormals = allNormals && scene->mMeshes[k]->HasNormals();
@@ -322,6 +339,15 @@ TriangleMesh readMesh(const std::string& path) {
         if (e.kind() == PlyHeaderError::Kind::EndWithoutLineBreak)
             fail(path, "truncated (the header ends without a line break)");
         if (e.kind() == PlyHeaderError::Kind::Malformed) fail(path, e.what());
+        // Not PLY by its first line, but a file named .ply or starting with "ply" would still
+        // reach assimp's PLY importer, without the count checks below (a face count of
+        // 4294967295 after "ply@" crashed it).
+        in.clear();
+        in.seekg(0);
+        char magic[3] = {};
+        in.read(magic, 3);
+        if (extensionOf(path) == "ply" || lower(std::string(magic, static_cast<size_t>(in.gcount()))) == "ply")
+            fail(path, e.what());
         isPly = false;
     }
     if (isPly) {

@@ -253,3 +253,44 @@ TEST_CASE("a PLY header that ends the file, with huge counts, is a MeshFileError
                                     "property double y\nproperty double z\nend_header\n0 0 0\n");
     fs::remove_all(dir);
 }
+
+TEST_CASE("meshes that crashed assimp are one-line MeshFileErrors (fuzz findings)", "[mesh]") {
+    // Each case is also an input of tests/fuzz/corpus/mesh (fuzz-replay-mesh).
+    const fs::path dir = scratchDir();
+    const std::string tri = "ply\nformat ascii 1.0\nelement vertex 3\nproperty float x\nproperty float y\n"
+                            "property float z\nelement face 1\nproperty list uchar int vertex_indices\n"
+                            "end_header\n0 0 0\n1 0 0\n0 1 0\n";
+    auto errorOf = [&](const std::string& name, const std::string& bytes) -> std::string {
+        {
+            std::ofstream((dir / name).string(), std::ios::binary) << bytes;
+        }
+        try {
+            readMesh((dir / name).string());
+        } catch (const MeshFileError& e) {
+            const std::string what = e.what();
+            CHECK(what.find('\n') == std::string::npos);
+            CHECK(what.rfind((dir / name).string() + ": ", 0) == 0);
+            return what;
+        }
+        FAIL("no MeshFileError for " << name);
+        return {};
+    };
+    // A face index -5: assimp's post-processing read past its vertices (SEGV).
+    CHECK_THAT(errorOf("negative_index.ply", tri + "3 0 1 -5\n"),
+               Catch::Matchers::Contains("mIndices[2] is out of range"));
+    // A face of 0 indices: assimp's Triangulate step aborted the process (ai_assert).
+    CHECK_THAT(errorOf("empty_face.ply", tri + "0\n"), Catch::Matchers::EndsWith("face 0 has no vertex indices"));
+    // Not PLY by its first line ("ply@") but named .ply, or starting with "ply": assimp's PLY
+    // importer took it without the count checks and crashed on 4294967295 faces.
+    const std::string almost = "ply@\nformat binary_little_endian 1.0\nelement vertex 3\nproperty float x\n"
+                               "property float y\nproperty float z\nelement face 4294967295\n"
+                               "property list uchar uint vertex_indices\nend_header\n" + std::string(36, '\0');
+    CHECK_THAT(errorOf("almost.ply", almost), Catch::Matchers::EndsWith(": not a PLY file"));
+    CHECK_THAT(errorOf("almost.obj", almost), Catch::Matchers::EndsWith(": not a PLY file"));
+    // What assimp reads well still reads.
+    {
+        std::ofstream((dir / "ok.ply").string(), std::ios::binary) << tri + "3 0 1 2\n";
+    }
+    CHECK(readMesh((dir / "ok.ply").string()).triangles.size() == 1);
+    fs::remove_all(dir);
+}
