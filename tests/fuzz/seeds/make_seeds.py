@@ -86,6 +86,14 @@ rows7 = [p + (0.1, 0.2, 0.3, 1000.0) for p in pts]
 put("particles", "ferro.ply", header("binary_little_endian", [("vertex", 4, props7)],
                                      ["frame 12", "time 0.4", "spacing 0.001"]).encode()
     + binary("<", rows7, ["float"] * 7))
+put("particles", "magnets.ply", header("binary_little_endian", [("vertex", 1, xyz)],
+                                      ["frame 2", "magnet_count 4",
+                                       "magnet dipole 0 0 0.05 0 0 1 0.5 0 0 0.002",
+                                       "magnet bar -0.1 0 0 1 0 0 100 0.05 0 0",
+                                       "magnet uniform 0 0 0 0 0 1 20000 0 0 0",
+                                       "magnet loop 0 0 -0.02 0 0 1 1000 0 0.03 0.001",
+                                       "susceptibility 1.5", "saturation 30000"]).encode()
+    + binary("<", pts[:1], ["float"] * 3))
 put("particles", "big-endian-all-types.ply",
     header("binary_big_endian", [("vertex", 2, ["char a", "uchar b", "short c", "ushort d", "int e",
                                                 "uint f", "float x", "double y", "float z"])]).encode()
