@@ -351,6 +351,12 @@ TriangleMesh readMesh(const std::string& path) {
         isPly = false;
     }
     if (isPly) {
+        // assimp's PLY importer takes positions and normals from different elements of the same
+        // name (`vertex 4` with nx, then `vertex 6` with x) and frees an invalid pointer.
+        for (size_t i = 0; i < header.elements.size(); ++i)
+            for (size_t j = 0; j < i; ++j)
+                if (header.elements[j].name == header.elements[i].name)
+                    fail(path, "bad PLY header: element '" + escapeControl(header.elements[i].name) + "' appears twice");
         in.clear();
         checkPlyCounts(path, header, in);
         TriangleMesh mesh;

@@ -287,6 +287,11 @@ TEST_CASE("meshes that crashed assimp are one-line MeshFileErrors (fuzz findings
                                "property list uchar uint vertex_indices\nend_header\n" + std::string(36, '\0');
     CHECK_THAT(errorOf("almost.ply", almost), Catch::Matchers::EndsWith(": not a PLY file"));
     CHECK_THAT(errorOf("almost.obj", almost), Catch::Matchers::EndsWith(": not a PLY file"));
+    // Two elements of one name: assimp took positions and normals from different ones and
+    // freed an invalid pointer.
+    CHECK_THAT(errorOf("twice.ply", "ply\nformat binary_little_endian 1.0\nelement vertex 4\nproperty float nx\n"
+                                    "element vertex 6\nproperty float x\nend_header\n" + std::string(13, '\0')),
+               Catch::Matchers::EndsWith(": bad PLY header: element 'vertex' appears twice"));
     // What assimp reads well still reads.
     {
         std::ofstream((dir / "ok.ply").string(), std::ios::binary) << tri + "3 0 1 2\n";
