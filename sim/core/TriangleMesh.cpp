@@ -18,7 +18,9 @@
 #include <cmath>
 #include <cstdio>
 #include <cstring>
+#include <cstdlib>
 #include <fstream>
+#include <iterator>
 #include <memory>
 
 namespace ferro {
@@ -121,6 +123,86 @@ void checkPlyCounts(const std::string& path, const PlyHeader& h, std::istream& i
             fail(path, "truncated (the header declares " + std::to_string(e.count) + " " + e.name + " items in " +
                            std::to_string(available) + " bytes)");
         items += e.count;
+    }
+}
+
+/// assimp's PLY importer sizes a list by its declared length before reading it, so a length
+/// of 4294967280 (or a float length) asked for 34 GB (fuzz finding). Walks the data of every
+/// element with properties once (their counts are bounded by checkPlyCounts) and checks each
+/// list length against the data that follows; called only for files that go to assimp.
+void checkPlyLists(const std::string& path, const PlyHeader& h, std::istream& in) {
+    bool anyList = false;
+    for (const auto& e : h.elements)
+        for (const auto& p : e.properties) {
+            if (!p.isList) continue;
+            anyList = true;
+            if (p.countType == PlyScalar::Float32 || p.countType == PlyScalar::Float64)
+                fail(path, "bad PLY header: list '" + escapeControl(p.name) + "' has a floating-point length");
+        }
+    if (!anyList) return;
+    in.clear();
+    in.seekg(static_cast<std::streamoff>(h.dataOffset));
+    const std::string data{std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>()};
+    auto tooLong = [&](const PlyElement& e, const PlyProperty& p, uint64_t item) {
+        fail(path, "truncated (" + e.name + " " + std::to_string(item) + ": list '" + escapeControl(p.name) +
+                       "' is longer than the rest of the file)");
+    };
+    if (h.format == PlyFormat::Ascii) {
+        size_t pos = 0;
+        auto token = [&](std::string& out) {
+            while (pos < data.size() && std::isspace(static_cast<unsigned char>(data[pos]))) ++pos;
+            const size_t b = pos;
+            while (pos < data.size() && !std::isspace(static_cast<unsigned char>(data[pos]))) ++pos;
+            out.assign(data, b, pos - b);
+            return pos > b;
+        };
+        std::string t;
+        for (const auto& e : h.elements) {
+            if (e.properties.empty()) continue;
+            for (uint64_t i = 0; i < e.count; ++i)
+                for (const auto& p : e.properties) {
+                    if (!token(t)) return; // truncated: assimp's own error
+                    if (!p.isList) continue;
+                    // Each item takes at least two characters (digit and separator).
+                    char* end = nullptr;
+                    const double n = std::strtod(t.c_str(), &end);
+                    if (!(n >= 0) || n > double(data.size() - pos) / 2 + 1) tooLong(e, p, i);
+                    for (uint64_t k = 0; k < static_cast<uint64_t>(n); ++k)
+                        if (!token(t)) return;
+                }
+        }
+        return;
+    }
+    const bool swap = (h.format == PlyFormat::BinaryLittleEndian) != hostIsLittleEndian();
+    size_t pos = 0;
+    for (const auto& e : h.elements) {
+        if (e.properties.empty()) continue;
+        for (uint64_t i = 0; i < e.count; ++i)
+            for (const auto& p : e.properties) {
+                if (!p.isList) {
+                    pos += plyScalarBytes(p.type);
+                    if (pos > data.size()) return; // truncated: assimp's own error
+                    continue;
+                }
+                const size_t cb = plyScalarBytes(p.countType);
+                if (pos + cb > data.size()) return;
+                unsigned char bytes[4] = {};
+                std::memcpy(bytes, data.data() + pos, cb);
+                if (swap) std::reverse(bytes, bytes + cb);
+                pos += cb;
+                uint64_t n = 0;
+                switch (p.countType) {
+                case PlyScalar::Int8: { int8_t v; std::memcpy(&v, bytes, 1); if (v < 0) tooLong(e, p, i); n = uint64_t(v); break; }
+                case PlyScalar::Int16: { int16_t v; std::memcpy(&v, bytes, 2); if (v < 0) tooLong(e, p, i); n = uint64_t(v); break; }
+                case PlyScalar::Int32: { int32_t v; std::memcpy(&v, bytes, 4); if (v < 0) tooLong(e, p, i); n = uint64_t(v); break; }
+                case PlyScalar::UInt8: { uint8_t v; std::memcpy(&v, bytes, 1); n = v; break; }
+                case PlyScalar::UInt16: { uint16_t v; std::memcpy(&v, bytes, 2); n = v; break; }
+                default: { uint32_t v; std::memcpy(&v, bytes, 4); n = v; break; }
+                }
+                const size_t ib = plyScalarBytes(p.type);
+                if (n > (data.size() - pos) / ib) tooLong(e, p, i);
+                pos += static_cast<size_t>(n) * ib;
+            }
     }
 }
 
@@ -364,6 +446,7 @@ TriangleMesh readMesh(const std::string& path) {
             mesh.comments = std::move(header.comments);
             return mesh;
         }
+        checkPlyLists(path, header, in);
     }
     in.close();
     TriangleMesh mesh = readWithAssimp(path);

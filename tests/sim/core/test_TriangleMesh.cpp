@@ -292,6 +292,19 @@ TEST_CASE("meshes that crashed assimp are one-line MeshFileErrors (fuzz findings
     CHECK_THAT(errorOf("twice.ply", "ply\nformat binary_little_endian 1.0\nelement vertex 4\nproperty float nx\n"
                                     "element vertex 6\nproperty float x\nend_header\n" + std::string(13, '\0')),
                Catch::Matchers::EndsWith(": bad PLY header: element 'vertex' appears twice"));
+    // A list length beyond the file (or a float one): assimp sized the list first (34 GB).
+    std::string verts(36, '\0');
+    CHECK_THAT(errorOf("long_list.ply", "ply\nformat binary_little_endian 1.0\nelement vertex 3\nproperty float x\n"
+                                        "property float y\nproperty float z\nelement face 1\n"
+                                        "property list uint uint vertex_indices\nend_header\n" + verts +
+                                        std::string("\xf0\xff\xff\xff", 4) + std::string(12, '\0')),
+               Catch::Matchers::EndsWith("truncated (face 0: list 'vertex_indices' is longer than the rest of the file)"));
+    CHECK_THAT(errorOf("long_list_ascii.ply", tri + "4294967280 0 1 2\n"),
+               Catch::Matchers::EndsWith("truncated (face 0: list 'vertex_indices' is longer than the rest of the file)"));
+    CHECK_THAT(errorOf("float_list.ply", "ply\nformat binary_little_endian 1.0\nelement vertex 3\nproperty float x\n"
+                                         "property float y\nproperty float z\nelement face 1\n"
+                                         "property list float uint vertex_indices\nend_header\n" + verts + std::string(16, '\0')),
+               Catch::Matchers::EndsWith("bad PLY header: list 'vertex_indices' has a floating-point length"));
     // What assimp reads well still reads.
     {
         std::ofstream((dir / "ok.ply").string(), std::ios::binary) << tri + "3 0 1 2\n";
