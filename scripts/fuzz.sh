@@ -74,7 +74,8 @@ for t in "${targets[@]}"; do
     rm -rf "$work"
   fi
   mkdir -p "$work"
-  log="$build/fuzz_$t.log"
+  # Separate logs, so that a --runs run (ctest) never touches those of a timed run.
+  log="$build/$([ -n "$runs" ] && echo runs || echo fuzz)_$t.log"
   echo "fuzz.sh: $t: $([ -n "$runs" ] && echo "$runs runs" || echo "$seconds s") on $(find "$corpus" -type f | wc -l) corpus inputs"
   start=$(date +%s)
   execs=0 crashes=0 rc=0
@@ -89,13 +90,13 @@ for t in "${targets[@]}"; do
     fi
     set +e
     (cd "$build" && env "${sanitizers[@]}" "$exe" "${common[@]}" "${limit[@]}" \
-       -artifact_prefix="$build/artifacts/$t-" "$work" "$corpus") >"$log.round" 2>&1
+       -artifact_prefix="$build/artifacts/$t-" "$work" "$corpus") >"$log.round.$$" 2>&1
     rc=$?
     set -e
-    cat "$log.round" >>"$log"
-    n=$(sed -n 's/^stat::number_of_executed_units: *//p' "$log.round" | tail -1)
+    cat "$log.round.$$" >>"$log"
+    n=$(sed -n 's/^stat::number_of_executed_units: *//p' "$log.round.$$" | tail -1)
     execs=$(( execs + ${n:-0} ))
-    rm -f "$log.round"
+    rm -f "$log.round.$$"
     [ "$rc" -eq 0 ] && break
     crashes=$(( crashes + 1 ))
     echo "fuzz.sh: $t FAILED (exit $rc); the end of $log:" >&2
