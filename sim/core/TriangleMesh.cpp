@@ -435,6 +435,11 @@ TriangleMesh readMesh(const std::string& path) {
     if (isPly) {
         // assimp's PLY importer takes positions and normals from different elements of the same
         // name (`vertex 4` with nx, then `vertex 6` with x) and frees an invalid pointer.
+        // It also reads a name that starts with digits as the element's count
+        // (`element 2222222222222222222face 1` asked for 35 GB).
+        for (const PlyElement& e : header.elements)
+            if (!e.name.empty() && std::isdigit(static_cast<unsigned char>(e.name[0])))
+                fail(path, "bad PLY header: element name '" + escapeControl(e.name) + "' starts with a digit");
         for (size_t i = 0; i < header.elements.size(); ++i)
             for (size_t j = 0; j < i; ++j)
                 if (header.elements[j].name == header.elements[i].name)

@@ -292,6 +292,10 @@ TEST_CASE("meshes that crashed assimp are one-line MeshFileErrors (fuzz findings
     CHECK_THAT(errorOf("twice.ply", "ply\nformat binary_little_endian 1.0\nelement vertex 4\nproperty float nx\n"
                                     "element vertex 6\nproperty float x\nend_header\n" + std::string(13, '\0')),
                Catch::Matchers::EndsWith(": bad PLY header: element 'vertex' appears twice"));
+    // An element name of digits: assimp read it as the element's count (35 GB).
+    CHECK_THAT(errorOf("digits.ply", "ply\nformat ascii 1.0\nelement vertex 1\nproperty float x\n"
+                                     "element 2222222222222222222face 1\nproperty float y\nend_header\n0\n1\n"),
+               Catch::Matchers::EndsWith("bad PLY header: element name '2222222222222222222face' starts with a digit"));
     // A list length beyond the file (or a float one): assimp sized the list first (34 GB).
     std::string verts(36, '\0');
     CHECK_THAT(errorOf("long_list.ply", "ply\nformat binary_little_endian 1.0\nelement vertex 3\nproperty float x\n"
