@@ -9,7 +9,7 @@
 #   --build-dir DIR  where the fuzz build lives (default build/fuzz)
 #   --build-only     build and stop;  --no-build: run what is built
 #   --merge          afterwards add the inputs that found new coverage to tests/fuzz/corpus/
-#                    (libFuzzer -merge=1: only inputs that add coverage are copied)
+#                    (libFuzzer -merge=1 -use_counters=0: only inputs that reach new code)
 #   --jobs N         compile jobs (default 2)
 #   --keep-going     (timed runs) after a crash, note it and go on fuzzing for the time left
 # New inputs of a timed run go to DIR/work/<target>, kept for the next run (the corpus is only
@@ -107,7 +107,7 @@ for t in "${targets[@]}"; do
   [ "$crashes" -eq 0 ] || status=1
   summary+=("$t: $execs executions in ${elapsed} s$([ "$crashes" -ne 0 ] && echo " ($crashes crashes: see $build/artifacts)" || true)")
   if [ "$merge" = 1 ]; then
-    (cd "$build" && env "${sanitizers[@]}" "$exe" -merge=1 "${common[@]:0:3}" "$corpus" "$work") \
+    (cd "$build" && env "${sanitizers[@]}" "$exe" -merge=1 -use_counters=0 "${common[@]:0:3}" "$corpus" "$work") \
       >"$build/merge_$t.log" 2>&1
     echo "fuzz.sh: $t: corpus now $(find "$corpus" -type f | wc -l) inputs"
   fi
