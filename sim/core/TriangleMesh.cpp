@@ -452,6 +452,17 @@ TriangleMesh readMesh(const std::string& path) {
             return mesh;
         }
         checkPlyLists(path, header, in);
+        // assimp splits header lines at blanks and tabs only: a vertical tab, form feed, NUL or
+        // lone carriage return, blank to us, made it read the data from another offset than
+        // the one checked above (`end_header` + vertical tab: SEGV).
+        in.clear();
+        in.seekg(0);
+        std::string head(static_cast<size_t>(header.dataOffset), '\0');
+        in.read(head.data(), static_cast<std::streamsize>(head.size()));
+        for (size_t i = 0; i < head.size(); ++i)
+            if (head[i] == '\v' || head[i] == '\f' || head[i] == '\0' ||
+                (head[i] == '\r' && (i + 1 >= head.size() || head[i + 1] != '\n')))
+                fail(path, "bad PLY header: a control character other than a line break, blank or tab");
     }
     in.close();
     TriangleMesh mesh = readWithAssimp(path);

@@ -292,6 +292,12 @@ TEST_CASE("meshes that crashed assimp are one-line MeshFileErrors (fuzz findings
     CHECK_THAT(errorOf("twice.ply", "ply\nformat binary_little_endian 1.0\nelement vertex 4\nproperty float nx\n"
                                     "element vertex 6\nproperty float x\nend_header\n" + std::string(13, '\0')),
                Catch::Matchers::EndsWith(": bad PLY header: element 'vertex' appears twice"));
+    // A vertical tab after end_header: blank to us, not to assimp, which read the data from
+    // another offset (SEGV).
+    CHECK_THAT(errorOf("vtab.ply", "ply\nformat ascii 1.0\nelement vertex 3\nproperty float x\nproperty float y\n"
+                                   "property float z\nelement face 1\nproperty list uchar int vertex_indices\n"
+                                   "end_header\v\n0 0 0\n1 0 0\n0 1 0\n3 0 1 2\n"),
+               Catch::Matchers::EndsWith("bad PLY header: a control character other than a line break, blank or tab"));
     // An element name of digits: assimp read it as the element's count (35 GB).
     CHECK_THAT(errorOf("digits.ply", "ply\nformat ascii 1.0\nelement vertex 1\nproperty float x\n"
                                      "element 2222222222222222222face 1\nproperty float y\nend_header\n0\n1\n"),
