@@ -14,8 +14,12 @@ RenderParams parseRenderParams(const SceneDocument& doc)
     RenderParams p;
     p.cameraPosition = r.vec3("camera_position", p.cameraPosition);
     p.cameraTarget = r.vec3("camera_target", p.cameraTarget);
-    if (!((p.cameraTarget - p.cameraPosition).norm() > 0))
+    const double distance = (p.cameraTarget - p.cameraPosition).norm();
+    if (!(distance > 0))
         r.fail("camera_target", "must differ from render.camera_position");
+    // Far enough apart to overflow (e.g. 1e308 and -1e308), the view direction would be nan.
+    if (!std::isfinite(distance))
+        r.fail("camera_target", "is too far from render.camera_position (the distance overflows a double)");
     // The image's up is +z (POV-Ray's sky), so the camera cannot look straight along z.
     const Vec3d view = (p.cameraTarget - p.cameraPosition).normalized();
     if (std::abs(view.z()) > 0.9999)

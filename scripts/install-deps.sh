@@ -1,5 +1,7 @@
 #!/usr/bin/env bash
-# Installs Ferro's Debian 12 build and run dependencies that are missing.
+# Installs Ferro's Debian 12 build and run dependencies that are missing. clang and
+# libclang-rt-dev build the libFuzzer targets of tests/fuzz, which the test suite runs briefly
+# (libFuzzer's library is only a recommend of clang, and recommends are not installed).
 # Idempotent: installs nothing when everything is present. Usage: install-deps.sh [--with-video]
 # As root it runs apt-get;
 # otherwise it prints the exact apt-get line to run and exits 1.
@@ -10,6 +12,7 @@ PACKAGES=(
   libeigen3-dev libtbb-dev libboost-iostreams-dev libopenvdb-dev
   libcgal-dev libassimp-dev libtomlplusplus-dev libcli11-dev catch2
   povray parallel
+  clang libclang-rt-dev
 )
 
 # --with-video: also ffmpeg, which the demo uses to assemble the rendered frames into a

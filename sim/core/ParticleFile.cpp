@@ -2,6 +2,7 @@
 #include "sim/core/ParticleFile.hpp"
 
 #include "sim/core/AtomicFile.hpp"
+#include "sim/core/ErrorText.hpp"
 #include "sim/core/PlyHeader.hpp"
 
 #include <algorithm>
@@ -15,6 +16,8 @@
 #include <type_traits>
 
 namespace ferro {
+
+ParticleFileError::ParticleFileError(const std::string& what) : std::runtime_error(escapeControl(what)) {}
 
 namespace {
 

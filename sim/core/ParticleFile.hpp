@@ -19,7 +19,9 @@ namespace ferro {
 
 class ParticleFileError : public std::runtime_error {
 public:
-    using std::runtime_error::runtime_error;
+    /// Control characters in `what` (a quoted comment value may hold a lone "\r") are
+    /// escaped (\r, \xNN), so that what() is one line.
+    explicit ParticleFileError(const std::string& what);
 };
 
 /// Columns of per-particle float data plus header metadata.

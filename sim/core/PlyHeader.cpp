@@ -1,6 +1,8 @@
 // PLY header parsing (see PlyHeader.hpp).
 #include "sim/core/PlyHeader.hpp"
 
+#include "sim/core/ErrorText.hpp"
+
 #include <algorithm>
 #include <cctype>
 #include <charconv>
@@ -71,6 +73,9 @@ LineEnd readLine(std::istream& in, std::string& line, size_t maxLen, uint64_t& c
 }
 
 } // namespace
+
+PlyHeaderError::PlyHeaderError(Kind kind, const std::string& what)
+    : std::runtime_error(escapeControl(what)), kind_(kind) {}
 
 bool hostIsLittleEndian() {
     const uint32_t one = 1;

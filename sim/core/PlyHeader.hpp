@@ -33,7 +33,8 @@ public:
         Malformed,         ///< a PLY header with a bad line, or one that ends before end_header
         EndWithoutLineBreak ///< `end_header` is the file's last line and has no line break
     };
-    PlyHeaderError(Kind kind, const std::string& what) : std::runtime_error(what), kind_(kind) {}
+    /// Control characters in `what` (a quoted header line may hold a lone "\r") are escaped.
+    PlyHeaderError(Kind kind, const std::string& what);
     Kind kind() const { return kind_; }
 
 private:

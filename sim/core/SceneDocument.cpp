@@ -1,5 +1,7 @@
 #include "sim/core/SceneDocument.hpp"
 
+#include "sim/core/ErrorText.hpp"
+
 #include <toml++/toml.h>
 
 #include <algorithm>
@@ -20,6 +22,8 @@ static_assert(TOML_EXCEPTIONS, "SceneDocument.cpp expects toml++ built with exce
 namespace ferro {
 
 namespace fs = std::filesystem;
+
+SceneError::SceneError(const std::string& what) : std::runtime_error(escapeControl(what)) {}
 
 std::string formatNumber(double v)
 {

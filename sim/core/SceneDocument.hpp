@@ -20,7 +20,9 @@ namespace ferro {
 /// Bad scene input. what() is a complete one-line message; tools exit with code 2.
 class SceneError : public std::runtime_error {
 public:
-    using std::runtime_error::runtime_error;
+    /// Control characters in `what` (from a quoted key, or toml++'s "saw '\n'") are escaped
+    /// (\n, \r, \xNN), so that what() is one line whatever the file holds.
+    explicit SceneError(const std::string& what);
 };
 
 class SceneDocument;

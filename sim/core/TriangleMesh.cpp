@@ -3,6 +3,7 @@
 #include "sim/core/TriangleMesh.hpp"
 
 #include "sim/core/AtomicFile.hpp"
+#include "sim/core/ErrorText.hpp"
 #include "sim/core/PlyHeader.hpp"
 
 #include <assimp/Exporter.hpp>
@@ -17,7 +18,9 @@
 #include <cmath>
 #include <cstdio>
 #include <cstring>
+#include <cstdlib>
 #include <fstream>
+#include <iterator>
 #include <memory>
 
 namespace ferro {
@@ -120,6 +123,86 @@ void checkPlyCounts(const std::string& path, const PlyHeader& h, std::istream& i
             fail(path, "truncated (the header declares " + std::to_string(e.count) + " " + e.name + " items in " +
                            std::to_string(available) + " bytes)");
         items += e.count;
+    }
+}
+
+/// assimp's PLY importer sizes a list by its declared length before reading it, so a length
+/// of 4294967280 (or a float length) asked for 34 GB (fuzz finding). Walks the data of every
+/// element with properties once (their counts are bounded by checkPlyCounts) and checks each
+/// list length against the data that follows; called only for files that go to assimp.
+void checkPlyLists(const std::string& path, const PlyHeader& h, std::istream& in) {
+    bool anyList = false;
+    for (const auto& e : h.elements)
+        for (const auto& p : e.properties) {
+            if (!p.isList) continue;
+            anyList = true;
+            if (p.countType == PlyScalar::Float32 || p.countType == PlyScalar::Float64)
+                fail(path, "bad PLY header: list '" + escapeControl(p.name) + "' has a floating-point length");
+        }
+    if (!anyList) return;
+    in.clear();
+    in.seekg(static_cast<std::streamoff>(h.dataOffset));
+    const std::string data{std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>()};
+    auto tooLong = [&](const PlyElement& e, const PlyProperty& p, uint64_t item) {
+        fail(path, "truncated (" + e.name + " " + std::to_string(item) + ": list '" + escapeControl(p.name) +
+                       "' is longer than the rest of the file)");
+    };
+    if (h.format == PlyFormat::Ascii) {
+        size_t pos = 0;
+        auto token = [&](std::string& out) {
+            while (pos < data.size() && std::isspace(static_cast<unsigned char>(data[pos]))) ++pos;
+            const size_t b = pos;
+            while (pos < data.size() && !std::isspace(static_cast<unsigned char>(data[pos]))) ++pos;
+            out.assign(data, b, pos - b);
+            return pos > b;
+        };
+        std::string t;
+        for (const auto& e : h.elements) {
+            if (e.properties.empty()) continue;
+            for (uint64_t i = 0; i < e.count; ++i)
+                for (const auto& p : e.properties) {
+                    if (!token(t)) return; // truncated: assimp's own error
+                    if (!p.isList) continue;
+                    // Each item takes at least two characters (digit and separator).
+                    char* end = nullptr;
+                    const double n = std::strtod(t.c_str(), &end);
+                    if (!(n >= 0) || n > double(data.size() - pos) / 2 + 1) tooLong(e, p, i);
+                    for (uint64_t k = 0; k < static_cast<uint64_t>(n); ++k)
+                        if (!token(t)) return;
+                }
+        }
+        return;
+    }
+    const bool swap = (h.format == PlyFormat::BinaryLittleEndian) != hostIsLittleEndian();
+    size_t pos = 0;
+    for (const auto& e : h.elements) {
+        if (e.properties.empty()) continue;
+        for (uint64_t i = 0; i < e.count; ++i)
+            for (const auto& p : e.properties) {
+                if (!p.isList) {
+                    pos += plyScalarBytes(p.type);
+                    if (pos > data.size()) return; // truncated: assimp's own error
+                    continue;
+                }
+                const size_t cb = plyScalarBytes(p.countType);
+                if (pos + cb > data.size()) return;
+                unsigned char bytes[4] = {};
+                std::memcpy(bytes, data.data() + pos, cb);
+                if (swap) std::reverse(bytes, bytes + cb);
+                pos += cb;
+                uint64_t n = 0;
+                switch (p.countType) {
+                case PlyScalar::Int8: { int8_t v; std::memcpy(&v, bytes, 1); if (v < 0) tooLong(e, p, i); n = uint64_t(v); break; }
+                case PlyScalar::Int16: { int16_t v; std::memcpy(&v, bytes, 2); if (v < 0) tooLong(e, p, i); n = uint64_t(v); break; }
+                case PlyScalar::Int32: { int32_t v; std::memcpy(&v, bytes, 4); if (v < 0) tooLong(e, p, i); n = uint64_t(v); break; }
+                case PlyScalar::UInt8: { uint8_t v; std::memcpy(&v, bytes, 1); n = v; break; }
+                case PlyScalar::UInt16: { uint16_t v; std::memcpy(&v, bytes, 2); n = v; break; }
+                default: { uint32_t v; std::memcpy(&v, bytes, 4); n = v; break; }
+                }
+                const size_t ib = plyScalarBytes(p.type);
+                if (n > (data.size() - pos) / ib) tooLong(e, p, i);
+                pos += static_cast<size_t>(n) * ib;
+            }
     }
 }
 
@@ -265,10 +348,26 @@ TriangleMesh readWithAssimp(const std::string& path) {
     Assimp::Importer importer;
     // Points and lines are dropped; only triangles describe a surface.
     importer.SetPropertyInteger(AI_CONFIG_PP_SBP_REMOVE, aiPrimitiveType_POINT | aiPrimitiveType_LINE);
-    const aiScene* scene = importer.ReadFile(
-        path, aiProcess_Triangulate | aiProcess_JoinIdenticalVertices | aiProcess_SortByPType |
-                  aiProcess_PreTransformVertices);
-    if (!scene) fail(path, std::string("cannot read mesh: ") + importer.GetErrorString());
+    // Imported and validated first, post-processed after: the steps index the vertices with
+    // the faces' indices as the importer left them (a PLY face index -5 crashed assimp), and
+    // Triangulate aborts the process on a face without indices or when a mesh's primitive
+    // types, which importers set from the declared face sizes, disagree with its faces (PLY
+    // faces of 0 indices did both); they are refused and recomputed here.
+    const aiScene* read = importer.ReadFile(path, aiProcess_ValidateDataStructure);
+    if (!read) fail(path, "cannot read mesh: " + oneLine(importer.GetErrorString()));
+    for (unsigned k = 0; k < read->mNumMeshes; ++k) {
+        aiMesh* m = read->mMeshes[k];
+        m->mPrimitiveTypes = 0;
+        for (unsigned f = 0; f < m->mNumFaces; ++f) {
+            const unsigned n = m->mFaces[f].mNumIndices;
+            if (n == 0) fail(path, "face " + std::to_string(f) + " has no vertex indices");
+            m->mPrimitiveTypes |= n == 1 ? aiPrimitiveType_POINT : n == 2 ? aiPrimitiveType_LINE
+                                : n == 3 ? aiPrimitiveType_TRIANGLE : aiPrimitiveType_POLYGON;
+        }
+    }
+    const aiScene* scene = importer.ApplyPostProcessing(aiProcess_Triangulate | aiProcess_JoinIdenticalVertices |
+                                                        aiProcess_SortByPType | aiProcess_PreTransformVertices);
+    if (!scene) fail(path, "cannot read mesh: " + oneLine(importer.GetErrorString()));
     TriangleMesh mesh;
     bool allNormals = true;
     for (unsigned k = 0; k < scene->mNumMeshes; ++k) allNormals = allNormals && scene->mMeshes[k]->HasNormals();
@@ -322,9 +421,29 @@ TriangleMesh readMesh(const std::string& path) {
         if (e.kind() == PlyHeaderError::Kind::EndWithoutLineBreak)
             fail(path, "truncated (the header ends without a line break)");
         if (e.kind() == PlyHeaderError::Kind::Malformed) fail(path, e.what());
+        // Not PLY by its first line, but a file named .ply or starting with "ply" would still
+        // reach assimp's PLY importer, without the count checks below (a face count of
+        // 4294967295 after "ply@" crashed it).
+        in.clear();
+        in.seekg(0);
+        char magic[3] = {};
+        in.read(magic, 3);
+        if (extensionOf(path) == "ply" || lower(std::string(magic, static_cast<size_t>(in.gcount()))) == "ply")
+            fail(path, e.what());
         isPly = false;
     }
     if (isPly) {
+        // assimp's PLY importer takes positions and normals from different elements of the same
+        // name (`vertex 4` with nx, then `vertex 6` with x) and frees an invalid pointer.
+        // It also reads a name that starts with digits as the element's count
+        // (`element 2222222222222222222face 1` asked for 35 GB).
+        for (const PlyElement& e : header.elements)
+            if (!e.name.empty() && std::isdigit(static_cast<unsigned char>(e.name[0])))
+                fail(path, "bad PLY header: element name '" + escapeControl(e.name) + "' starts with a digit");
+        for (size_t i = 0; i < header.elements.size(); ++i)
+            for (size_t j = 0; j < i; ++j)
+                if (header.elements[j].name == header.elements[i].name)
+                    fail(path, "bad PLY header: element '" + escapeControl(header.elements[i].name) + "' appears twice");
         in.clear();
         checkPlyCounts(path, header, in);
         TriangleMesh mesh;
@@ -332,6 +451,18 @@ TriangleMesh readMesh(const std::string& path) {
             mesh.comments = std::move(header.comments);
             return mesh;
         }
+        checkPlyLists(path, header, in);
+        // assimp splits header lines at blanks and tabs only: a vertical tab, form feed, NUL or
+        // lone carriage return, blank to us, made it read the data from another offset than
+        // the one checked above (`end_header` + vertical tab: SEGV).
+        in.clear();
+        in.seekg(0);
+        std::string head(static_cast<size_t>(header.dataOffset), '\0');
+        in.read(head.data(), static_cast<std::streamsize>(head.size()));
+        for (size_t i = 0; i < head.size(); ++i)
+            if (head[i] == '\v' || head[i] == '\f' || head[i] == '\0' ||
+                (head[i] == '\r' && (i + 1 >= head.size() || head[i + 1] != '\n')))
+                fail(path, "bad PLY header: a control character other than a line break, blank or tab");
     }
     in.close();
     TriangleMesh mesh = readWithAssimp(path);

@@ -1,5 +1,8 @@
 #include "sim/magnetics/MagnetState.hpp"
 
+#include "sim/core/SceneDocument.hpp"
+
+#include <cmath>
 #include <cstdio>
 #include <sstream>
 
@@ -51,6 +54,18 @@ std::vector<Magnet> readMagnetComments(const ParticleTable& table)
         const MagnetKindInfo* info = findMagnetKind(kind);
         if (!info) throw ParticleFileError("unknown magnet kind '" + kind + "' in header");
         m.kind = info->kind;
+        // What the scene parser (MagnetScene.cpp) guarantees, so that a hand-edited or foreign
+        // header cannot give the field evaluation a magnet it would overflow on (fuzz finding).
+        const std::string& line = value; // a lambda cannot capture a structured binding in C++17
+        auto bad = [&](const std::string& why) {
+            throw ParticleFileError("malformed 'comment magnet " + line + "' (" + why + ")");
+        };
+        if (!(std::abs(m.strength) <= info->maxStrength))
+            bad(std::string(info->strengthKey) + " must be within +-" + formatNumber(info->maxStrength) + " " +
+                info->strengthUnit + " for a " + info->name + " magnet");
+        if (info->usesLength && !(m.length > 0)) bad("length must be > 0");
+        if (info->usesRadius && !(m.radius > 0)) bad("radius must be > 0");
+        if (!(m.softening >= 0)) bad("softening must be >= 0");
         magnets.push_back(m);
     }
     if (expected >= 0 && expected != long(magnets.size()))

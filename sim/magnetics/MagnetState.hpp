@@ -28,7 +28,9 @@ void writeMagnetComments(ParticleTable& table, const std::vector<Magnet>& magnet
                          const MagnetizationParams* law = nullptr);
 
 /// The magnets of a particle file's header. Throws ParticleFileError on a malformed line
-/// or a count that does not match; a file without `magnet_count` has no magnets.
+/// (including values the scene would refuse: a strength beyond the kind's maxStrength, a bar
+/// without length, a loop without radius, a negative softening) or a count that does not
+/// match; a file without `magnet_count` has no magnets.
 std::vector<Magnet> readMagnetComments(const ParticleTable& table);
 
 } // namespace ferro

@@ -132,6 +132,11 @@ TEST_CASE("[render] defaults, overrides and unknown keys", "[pov]")
     CHECK_THROWS_WITH(parseRenderParams(SceneDocument::parse(
                           dishScene("[render]\ncamera_position = [0, 0, 1]\ncamera_target = [0, 0, 0]\n"), "s.toml")),
                       Catch::Contains("straight"));
+    // Fuzz finding: both corners finite, their distance not; the view direction was nan.
+    CHECK_THROWS_WITH(parseRenderParams(SceneDocument::parse(
+                          dishScene("[render]\ncamera_position = [1e308, 0, 0.1]\ncamera_target = [-1e308, 0, 0]\n"),
+                          "s.toml")),
+                      Catch::Contains("render.camera_target: is too far from render.camera_position"));
 
     ShotDescription shot = describeShot(SceneDocument::parse(dishScene("[render]\nwidth = 320\n"), "s.toml"));
     CHECK(shot.lastFrame == 5); // 0.5 s at 10 fps

@@ -289,6 +289,10 @@ TEST_CASE("ParticleTable helpers", "[io]") {
     CHECK(t.comment("absent", "dflt") == "dflt");
     CHECK(t.commentNumber("absent", 2.5) == 2.5);
     CHECK_THROWS_AS(t.commentNumber("note", 0), ParticleFileError);
+    // A header comment may hold a lone carriage return; the message escapes it (one line).
+    t.comments.emplace_back("cr", "1\r2");
+    CHECK_THROWS_WITH(t.commentNumber("cr", 0), "comment 'cr' is not a number: '1\\r2'");
+    t.comments.pop_back();
 
     t.comments.emplace_back("frame", "99");
     t.setComment("frame", "13");

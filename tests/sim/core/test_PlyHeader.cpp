@@ -79,6 +79,9 @@ TEST_CASE("readPlyHeader errors: other formats, broken headers, a last line with
     CHECK(errorKind(head + "property list uchar idx\nend_header\n") == PlyHeaderError::Kind::Malformed);
     CHECK(errorKind(head + "texture cube.png\nend_header\n", &what) == PlyHeaderError::Kind::Malformed);
     CHECK(what == "bad PLY header: unexpected line 'texture cube.png'");
+    // A lone carriage return inside a quoted line is escaped: the message stays one line.
+    CHECK(errorKind(head + "texture a\rb\x01\nend_header\n", &what) == PlyHeaderError::Kind::Malformed);
+    CHECK(what == "bad PLY header: unexpected line 'texture a\\rb\\x01'");
     // A header of more than 1 MiB of comments is refused before it is all kept.
     std::string huge = head;
     while (huge.size() <= (1u << 20)) huge += "comment " + std::string(1000, 'c') + "\n";

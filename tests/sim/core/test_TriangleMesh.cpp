@@ -253,3 +253,72 @@ TEST_CASE("a PLY header that ends the file, with huge counts, is a MeshFileError
                                     "property double y\nproperty double z\nend_header\n0 0 0\n");
     fs::remove_all(dir);
 }
+
+TEST_CASE("meshes that crashed assimp are one-line MeshFileErrors (fuzz findings)", "[mesh]") {
+    // Each case is also an input of tests/fuzz/corpus/mesh (fuzz-replay-mesh).
+    const fs::path dir = scratchDir();
+    const std::string tri = "ply\nformat ascii 1.0\nelement vertex 3\nproperty float x\nproperty float y\n"
+                            "property float z\nelement face 1\nproperty list uchar int vertex_indices\n"
+                            "end_header\n0 0 0\n1 0 0\n0 1 0\n";
+    auto errorOf = [&](const std::string& name, const std::string& bytes) -> std::string {
+        {
+            std::ofstream((dir / name).string(), std::ios::binary) << bytes;
+        }
+        try {
+            readMesh((dir / name).string());
+        } catch (const MeshFileError& e) {
+            const std::string what = e.what();
+            CHECK(what.find('\n') == std::string::npos);
+            CHECK(what.rfind((dir / name).string() + ": ", 0) == 0);
+            return what;
+        }
+        FAIL("no MeshFileError for " << name);
+        return {};
+    };
+    // A face index -5: assimp's post-processing read past its vertices (SEGV).
+    CHECK_THAT(errorOf("negative_index.ply", tri + "3 0 1 -5\n"),
+               Catch::Matchers::Contains("mIndices[2] is out of range"));
+    // A face of 0 indices: assimp's Triangulate step aborted the process (ai_assert).
+    CHECK_THAT(errorOf("empty_face.ply", tri + "0\n"), Catch::Matchers::EndsWith("face 0 has no vertex indices"));
+    // Not PLY by its first line ("ply@") but named .ply, or starting with "ply": assimp's PLY
+    // importer took it without the count checks and crashed on 4294967295 faces.
+    const std::string almost = "ply@\nformat binary_little_endian 1.0\nelement vertex 3\nproperty float x\n"
+                               "property float y\nproperty float z\nelement face 4294967295\n"
+                               "property list uchar uint vertex_indices\nend_header\n" + std::string(36, '\0');
+    CHECK_THAT(errorOf("almost.ply", almost), Catch::Matchers::EndsWith(": not a PLY file"));
+    CHECK_THAT(errorOf("almost.obj", almost), Catch::Matchers::EndsWith(": not a PLY file"));
+    // Two elements of one name: assimp took positions and normals from different ones and
+    // freed an invalid pointer.
+    CHECK_THAT(errorOf("twice.ply", "ply\nformat binary_little_endian 1.0\nelement vertex 4\nproperty float nx\n"
+                                    "element vertex 6\nproperty float x\nend_header\n" + std::string(13, '\0')),
+               Catch::Matchers::EndsWith(": bad PLY header: element 'vertex' appears twice"));
+    // A vertical tab after end_header: blank to us, not to assimp, which read the data from
+    // another offset (SEGV).
+    CHECK_THAT(errorOf("vtab.ply", "ply\nformat ascii 1.0\nelement vertex 3\nproperty float x\nproperty float y\n"
+                                   "property float z\nelement face 1\nproperty list uchar int vertex_indices\n"
+                                   "end_header\v\n0 0 0\n1 0 0\n0 1 0\n3 0 1 2\n"),
+               Catch::Matchers::EndsWith("bad PLY header: a control character other than a line break, blank or tab"));
+    // An element name of digits: assimp read it as the element's count (35 GB).
+    CHECK_THAT(errorOf("digits.ply", "ply\nformat ascii 1.0\nelement vertex 1\nproperty float x\n"
+                                     "element 2222222222222222222face 1\nproperty float y\nend_header\n0\n1\n"),
+               Catch::Matchers::EndsWith("bad PLY header: element name '2222222222222222222face' starts with a digit"));
+    // A list length beyond the file (or a float one): assimp sized the list first (34 GB).
+    std::string verts(36, '\0');
+    CHECK_THAT(errorOf("long_list.ply", "ply\nformat binary_little_endian 1.0\nelement vertex 3\nproperty float x\n"
+                                        "property float y\nproperty float z\nelement face 1\n"
+                                        "property list uint uint vertex_indices\nend_header\n" + verts +
+                                        std::string("\xf0\xff\xff\xff", 4) + std::string(12, '\0')),
+               Catch::Matchers::EndsWith("truncated (face 0: list 'vertex_indices' is longer than the rest of the file)"));
+    CHECK_THAT(errorOf("long_list_ascii.ply", tri + "4294967280 0 1 2\n"),
+               Catch::Matchers::EndsWith("truncated (face 0: list 'vertex_indices' is longer than the rest of the file)"));
+    CHECK_THAT(errorOf("float_list.ply", "ply\nformat binary_little_endian 1.0\nelement vertex 3\nproperty float x\n"
+                                         "property float y\nproperty float z\nelement face 1\n"
+                                         "property list float uint vertex_indices\nend_header\n" + verts + std::string(16, '\0')),
+               Catch::Matchers::EndsWith("bad PLY header: list 'vertex_indices' has a floating-point length"));
+    // What assimp reads well still reads.
+    {
+        std::ofstream((dir / "ok.ply").string(), std::ios::binary) << tri + "3 0 1 2\n";
+    }
+    CHECK(readMesh((dir / "ok.ply").string()).triangles.size() == 1);
+    fs::remove_all(dir);
+}

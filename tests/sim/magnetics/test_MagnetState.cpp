@@ -115,6 +115,11 @@ TEST_CASE("a malformed magnet header is a one-line ParticleFileError", "[magnets
         {"unknown magnet kind 'horseshoe'", {{"magnet", "horseshoe 0 0 0 0 0 1 0.5 0 0 0"}}},
         {"magnet_count 2 but lists 1", {{"magnet_count", "2"}, {"magnet", "bar 0 0 0 0 0 1 1 0.1 0 0"}}},
         {"magnet_count 0 but lists 1", {{"magnet", "loop 0 0 0 0 0 1 1 0 0.1 0"}, {"magnet_count", "0"}}},
+        // Values the scene refuses (fuzz finding: the header took them, the field overflowed).
+        {"(moment must be within +-1e+06 A m^2 for a dipole magnet)", {{"magnet", "dipole 0 0 0 0 0 1 1e30 0 0 0"}}},
+        {"(length must be > 0)", {{"magnet", "bar 0 0 0 0 0 1 1 0 0 0"}}},
+        {"(radius must be > 0)", {{"magnet", "loop 0 0 0 0 0 1 1 0 -0.1 0"}}},
+        {"(softening must be >= 0)", {{"magnet", "dipole 0 0 0 0 0 1 1 0 0 -1"}}},
     };
     for (const auto& [expected, comments] : cases) {
         const std::string what = errorOf(withComments(comments));

@@ -612,3 +612,27 @@ TEST_CASE("magnetization.smoothing selects the particle model", "[scene]")
     CHECK_THAT(sceneError(kMinimal + "[magnetization]\nsmoothing = 0.5\n"),
                Contains("magnetization.smoothing: must be 0 (uniformly magnetized spheres) or in [1, 6]"));
 }
+
+TEST_CASE("a table header with three brackets is a syntax error on its line (fuzz finding)", "[scene]")
+{
+    // toml++ 3.3.0 asserts on it in a build with assertions; the library Ferro links reports
+    // the error, as here (tests/fuzz/corpus/scene holds the input the fuzzer found).
+    CHECK_THAT(sceneError("[fluid]\n[[[fluid.block]]\n"), Contains("t.toml:2: ") && Contains("saw '['"));
+    // In an override the same text is no TOML value, so it is taken as a string.
+    CHECK_THAT(sceneError(kMinimal, {"a=1\n[[[b]"}), Contains("--set a:1: a: unknown section"));
+    // toml++ 3.3.0 reaches __builtin_unreachable() deciding whether U+00A1 at the start of a
+    // line is white space; Debian's build of it says no, and the error names the character.
+    CHECK_THAT(sceneError("\xc2\xa1 = 1\n"), Contains("t.toml:1: ") && Contains("saw '\xc2\xa1'"));
+}
+
+TEST_CASE("scene errors quoting a line break stay one line (fuzz finding)", "[scene]")
+{
+    // toml++ quotes the character it saw, here the line break after "i".
+    const std::string syntax = sceneError("[shot]\nfps = i\n");
+    CHECK(syntax.find_first_of("\r\n") == std::string::npos);
+    CHECK_THAT(syntax, Contains("t.toml:2: ") && Contains("\\n"));
+    // A quoted key may hold any character; the message shows it escaped.
+    const std::string key = sceneError(kMinimal + "[shot]\n\"a\\nb\\r\" = 1\n");
+    CHECK(key.find_first_of("\r\n") == std::string::npos);
+    CHECK_THAT(key, Contains("shot.a\\nb\\r: unknown key"));
+}
