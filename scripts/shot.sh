@@ -34,7 +34,8 @@ while [[ $# -gt 0 ]]; do
   esac
 done
 [[ -n "$scene" && -n "$out" ]] || { usage >&2; exit 2; }
-[[ -f "$scene" ]] || die "$scene: no such scene file"
+# A missing scene is a missing input: exit 4, as in every stage (sim/core/ExitCodes.hpp).
+[[ -f "$scene" ]] || { echo "shot.sh: error: $scene: no such scene file" >&2; exit 4; }
 # At most 7 digits (frames up to 9,999,999, like the stages): bash arithmetic never overflows.
 [[ -z "$max_frames" || "$max_frames" =~ ^[0-9]{1,7}$ ]] || die "--max-frames needs a number up to 9999999 (got '$max_frames')"
 [[ -z "$frames" || "$frames" =~ ^[0-9]{1,7}:[0-9]{1,7}$ ]] || die "--frames needs FIRST:LAST up to 9999999 (got '$frames')"

@@ -1,4 +1,5 @@
 #include "sim/core/SceneDocument.hpp"
+#include "sim/core/StageErrors.hpp"
 
 #include "sim/core/ErrorText.hpp"
 
@@ -502,9 +503,9 @@ SceneDocument::~SceneDocument() = default;
 
 SceneDocument SceneDocument::load(const std::string& path, const std::vector<std::string>& overrides)
 {
-    std::error_code ec;
-    if (!fs::is_regular_file(path, ec))
-        throw SceneError(path + ": cannot open scene file");
+    // A missing or unreadable scene is a missing input (exit 4), as a missing PLY is in
+    // every stage; what the file says is the scene's business (SceneError, exit 2).
+    requireReadable(path);
     SceneDocument doc;
     doc.path_ = path;
     try {

@@ -183,12 +183,12 @@ TEST_CASE("shot.sh renders a tiny shot, and make re-runs exactly the stale frame
     CHECK(fs::exists(out / "particles" / ".complete"));
 }
 
-TEST_CASE("shot.sh rejects bad arguments with one line and exit code 2", "[pov][pipeline]")
+TEST_CASE("shot.sh rejects bad arguments with one line and exit code 2 (a missing scene 4)", "[pov][pipeline]")
 {
     const fs::path dir = freshDir("shot_errors");
     const std::string shot = "FERRO_BIN='" + pipelineBin() + "' '" + kSource + "/scripts/shot.sh' ";
     Result res = run(shot + "'" + (dir / "missing.toml").string() + "' '" + (dir / "out").string() + "'");
-    CHECK(res.code == 2);
+    CHECK(res.code == 4);   // a missing input, as in every stage
     CHECK(res.output.rfind("shot.sh: error: ", 0) == 0);
     spit(dir / "tiny.toml", kTinyScene);
     res = run(shot + "'" + (dir / "tiny.toml").string() + "' '" + (dir / "out").string() + "' --frames 5");

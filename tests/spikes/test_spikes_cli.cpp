@@ -134,10 +134,10 @@ TEST_CASE("ferro-spikes: bad input is one line and exit code 2", "[spikes][cli]"
                     " --out " + (dir / "o.ply").string(),
                 err, dir) == 4);
     oneLine(err);
-    // A missing scene file is bad input.
+    // A missing scene file is a missing input too (it used to be 2, bad input).
     REQUIRE(run((dir / "pool.ply").string() + " --scene " + (dir / "missing.toml").string() + " --out " +
                     (dir / "o.ply").string(),
-                err, dir) == 2);
+                err, dir) == 4);
     oneLine(err);
     REQUIRE(run((dir / "pool.ply").string() + " --scene " + scene + " --set spikes.bogus=1 --out " +
                     (dir / "o.ply").string(),

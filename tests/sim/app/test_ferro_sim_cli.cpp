@@ -66,7 +66,7 @@ TEST_CASE("ferro-sim writes readable frames with the documented header", "[cli]"
     fs::remove_all(dir);
 }
 
-TEST_CASE("ferro-sim rejects bad input with one line and exit code 2", "[cli]") {
+TEST_CASE("ferro-sim rejects bad input with one line and exit code 2 (a missing scene 4)", "[cli]") {
     const fs::path dir = freshDir("bad");
     struct Case {
         std::string args, needle;
@@ -91,8 +91,9 @@ TEST_CASE("ferro-sim rejects bad input with one line and exit code 2", "[cli]") 
         REQUIRE(lines(r.output) == 1);
         REQUIRE(r.output.find(c.needle) != std::string::npos);
     }
+    // A missing scene is a missing input: 4, as a missing PLY is in every stage.
     const CommandResult missing = run(kSim + " /nonexistent/scene.toml --out " + dir.string());
-    REQUIRE(missing.code == 2);
+    REQUIRE(missing.code == 4);
     REQUIRE(lines(missing.output) == 1);
     fs::remove_all(dir);
 }

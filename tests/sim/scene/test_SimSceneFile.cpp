@@ -3,6 +3,8 @@
 #include "sim/scene/SimSceneFile.hpp"
 #include "tests/TestUtil.hpp"
 
+#include "sim/core/StageErrors.hpp"
+
 #include <catch2/catch.hpp>
 
 #include <cmath>
@@ -492,8 +494,16 @@ TEST_CASE("loading files", "[scene]")
     TempDir tmp("load");
     SECTION("a missing file")
     {
+        // A missing input, exit 4 in every stage, like a missing PLY (not a bad scene, 2).
         std::string path = (tmp.path / "absent.toml").string();
-        CHECK(errorOf([&] { SceneDocument::load(path); }) == path + ": cannot open scene file");
+        try {
+            SceneDocument::load(path);
+            FAIL("a missing scene file was loaded");
+        } catch (const InputMissingError& e) {
+            CHECK(std::string(e.what()) == path + ": cannot open: No such file or directory");
+            CHECK(e.code() == 4);
+        }
+        CHECK_THROWS_AS(SceneDocument::load(tmp.path.string()), InputMissingError);   // a directory
     }
     SECTION("a syntax error names file and line")
     {
