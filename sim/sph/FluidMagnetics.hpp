@@ -20,7 +20,7 @@
 //   density, whose deficit at the free surface would inflate the force there. With the
 //   `external` solver this is exactly mu0 grad F(H_magnets) / rho0, F(H) = integral_0^H M dH'
 //   (langevinEnergy), and a pool at rest obeys rho g dz_s = mu0 dF along its surface
-//   (tests/sim/sph: within 6 % of the centre rise, DFSPH and WCSPH). It leaves out the
+//   (tests/sim/sph: within 5 % of the centre rise, DFSPH and WCSPH). It leaves out the
 //   magnetic normal traction mu0 M_n^2 / 2 of the particles' own field at the surface.
 // - magnetization.force = "surface" (experimental): the Kelvin force density of the TOTAL
 //   field, mu0 (M . grad) H, is for M parallel to H and curl H = 0 exactly grad(mu0 F(H))

@@ -79,7 +79,7 @@ TEST_CASE("minimal scene takes the documented defaults", "[scene]")
     CHECK(s.solver.maxDt == 0.001);
     CHECK(s.solver.minDt == 1e-7);
     CHECK(s.solver.soundSpeed == 0.0);
-    CHECK(s.solver.maxDensityError == 0.0001);
+    CHECK(s.solver.maxDensityError == 0.0002);
     CHECK(s.solver.maxDivergenceError == 0.001);
     CHECK(s.solver.maxIterations == 100);
     CHECK(s.solver.artificialViscosity == 0.02);
