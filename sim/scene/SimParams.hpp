@@ -74,7 +74,8 @@ struct SolverParams {
     /// still magnet (2,560 particles) and the resting tank of examples/hydrostatic.toml:
     /// 0.1 % kept 1.8 mm/s of jitter in the pool for good (tank pressure slope -6 %); 0.02 %
     /// brings it to rest (0.6 mm/s at 1.5 s; slope +3 %) for ~1.4x the step cost; 0.01 %
-    /// (SPlisHSPlasH's default) hit the iteration cap and left the stored pressure 33 % low.
+    /// (SPlisHSPlasH's default) left the stored pressure of the tank 33 % low (not analysed
+    /// yet) for ~3x the step cost at rest.
     double maxDensityError = 0.0002;
     double maxDivergenceError = 0.001;///< DFSPH: mean relative density change per step left by the divergence solve (0.1 %)
     int maxIterations = 100;          ///< DFSPH: iteration cap of each solve
