@@ -33,29 +33,25 @@ FluidMagnetics::FluidMagnetics(const SimScene& scene, double particleVolume, dou
       rho0_(scene.fluid.restDensity), gravity_(scene.solver.gravity.norm()) {
     if (active() && magnetic()) solver_ = std::make_unique<MagnetizationSolver>(law_);
     // The surface model's scales from a flat cubic lattice surface (the seed's lattice,
-    // support 2 spacings as FluidSimulation uses): the fill c = V sum_j W_ij of the top
-    // layer, its |grad c|, and the column sum kappa = sum_layers w V |grad c| / s^2.
+    // support 2 spacings as FluidSimulation uses): |grad c| of the top layer and the
+    // column sum kappa = sum_layers w V |grad c| / s^2.
     const double s = spacing_;
     const CubicSplineKernel kernel(Real(2 * s));
-    std::vector<double> fill, gradient;
+    std::vector<double> gradient;
     for (int depth = 0; depth <= 3; ++depth) {
-        double c = 0, gz = 0;
+        double gz = 0;
         for (int a = -2; a <= 2; ++a)
             for (int b = -2; b <= 2; ++b)
                 for (int k = -2; k <= 2; ++k) {
                     if (k > depth) continue;   // above the top layer
                     const Vec3 rij = Vec3(Real(a), Real(b), Real(k)) * Real(-s);
-                    const Real r = rij.norm();
-                    c += volume_ * double(kernel.W(r));
-                    gz += volume_ * double(kernel.gradW(rij, r).z());
+                    gz += volume_ * double(kernel.gradW(rij, rij.norm()).z());
                 }
-        fill.push_back(c);
         gradient.push_back(std::abs(gz));
     }
-    flatFill_ = fill[0];
     flatGradient_ = gradient[0];
     double column = 0;
-    for (size_t k = 0; k < fill.size(); ++k) column += surfaceWeight(gradient[k]) * gradient[k];
+    for (double g : gradient) column += surfaceWeight(g) * g;
     layerFactor_ = volume_ * column / (s * s);
 }
 
@@ -274,7 +270,6 @@ void FluidMagnetics::computeSurfacePressure(const std::vector<Vec3>& x, const st
     double C = 0;
     for (size_t i = 0; i < n; ++i)
         if (weight[i] >= 0.5) C = std::max(C, psi[i]);
-    offset_ = C;
     const double scale = 1.0 / (rho0_ * layerFactor_);
     forEachParticle(n, [&](size_t i) {
         kelvin_[i] = weight[i] > 0 ? Vec3((scale * weight[i] * std::max(C - psi[i], 0.0) * gradC[i].cast<double>()).cast<Real>())

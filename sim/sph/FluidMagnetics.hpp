@@ -103,16 +103,8 @@ public:
                 const std::vector<Real>& exposure, bool forceSolve);
     /// True when update() needs the colour gradient (the surface force model).
     bool needsColorGradient() const { return magnetic() && law_.force == MagnetizationParams::Force::Surface; }
-    /// The fill c and colour gradient |grad c| [1/m] of the top particle of a flat cubic
-    /// lattice surface at this spacing and support, and kappa (see above): the surface
-    /// model's scales.
-    double flatSurfaceFill() const { return flatFill_; }
-    double flatSurfaceGradient() const { return flatGradient_; }
-    double surfaceLayerFactor() const { return layerFactor_; }
     /// Surface weight w in [0, 1] of a particle from its colour gradient |grad c| [1/m].
     double surfaceWeight(double gradient) const;
-    /// C of the last update [Pa] (the largest mu0 (F + M_n^2/2) on the surface).
-    double surfacePressureOffset() const { return offset_; }
     /// Adds the magnetic acceleration [m/s^2] of the last update to `a` (current order).
     void addKelvinAcceleration(std::vector<Vec3>& a) const;
     /// Largest Kelvin acceleration of the last update [m/s^2] (for the time step).
@@ -160,7 +152,7 @@ private:
     std::vector<Vec3> Hext_, Hind_, H_, M_;  // per particle, current order
     std::vector<Vec3> kelvin_;               // Kelvin acceleration per particle [m/s^2]
     double maxAcceleration_ = 0;
-    double flatFill_ = 0, flatGradient_ = 0, layerFactor_ = 1, offset_ = 0;  // surface model, see above
+    double flatGradient_ = 0, layerFactor_ = 1;  // surface model: |grad c| of a flat lattice surface, kappa
     bool traction_ = true;                   // the last solve had the particles' own field
     std::vector<Vec3> HextSolved_;           // applied field at the last solve, current order
     static constexpr size_t kMaxInterval = 200;
