@@ -70,9 +70,12 @@ prepare: particles/.complete shot/shot.pov shot/look.inc
 # ---- Simulation: one run writes every frame ---------------------------------------------------
 # Into particles.new/, swapped in only when the run succeeded: a failed or interrupted
 # re-simulation (after a [sim] edit) keeps the previous frames and everything made from them.
+# The settled pre-roll ([shot] preroll) is cached beside it in preroll.ply: ferro-sim reuses
+# it while the sections it depends on are unchanged (an edit of later magnet keys re-runs the
+# shot but not the pre-roll).
 particles/.complete: .scene/sim.toml
 	rm -rf particles.new
-	$(FERRO_BIN)/ferro-sim '$(SCENE)' --out particles.new --quiet $(if $(MAX_FRAMES),--max-frames $(MAX_FRAMES))
+	$(FERRO_BIN)/ferro-sim '$(SCENE)' --out particles.new --preroll-cache preroll.ply --quiet $(if $(MAX_FRAMES),--max-frames $(MAX_FRAMES))
 	touch particles.new/.complete
 	rm -rf particles.old
 	if [ -d particles ]; then mv particles particles.old; fi

@@ -1,5 +1,8 @@
 #include "sim/app/ShotRunner.hpp"
 
+#include "sim/app/FrameTable.hpp"
+#include "sim/app/Preroll.hpp"
+
 #include "sim/sph/FluidSimulation.hpp"
 #include "sim/magnetics/MagnetState.hpp"
 #include "sim/core/ParticleFile.hpp"
@@ -58,50 +61,6 @@ std::string magnetSummary(const FluidSimulation& sim) {
     if (fm->magnetic()) o << ", chi0 " << fm->law().susceptibility << ", Ms " << fm->law().saturation << " A/m";
     else o << " (fluid not magnetic: magnetization.susceptibility = 0)";
     return o.str();
-}
-
-ParticleTable frameTable(const FluidSimulation& sim, int frame, const RunOptions& opt) {
-    ParticleTable t;
-    t.names = {"x", "y", "z", "vx", "vy", "vz", "density", "pressure", "hx", "hy", "hz", "mx", "my", "mz"};
-    const auto x = sim.positionsById();
-    const auto v = sim.velocitiesById();
-    const auto rho = sim.densitiesById();
-    const auto p = sim.pressuresById();
-    const auto H = sim.fieldById();
-    const auto M = sim.magnetizationById();
-    const size_t n = x.size();
-    t.values.resize(n * t.names.size());
-    for (size_t i = 0; i < n; ++i) {
-        float* row = &t.values[i * t.names.size()];
-        row[0] = x[i].x(); row[1] = x[i].y(); row[2] = x[i].z();
-        row[3] = v[i].x(); row[4] = v[i].y(); row[5] = v[i].z();
-        row[6] = rho[i];
-        row[7] = p[i];
-        row[8] = H[i].x(); row[9] = H[i].y(); row[10] = H[i].z();
-        row[11] = M[i].x(); row[12] = M[i].y(); row[13] = M[i].z();
-    }
-    auto num = [](double d) {
-        std::ostringstream o;
-        o.precision(17);
-        o << d;
-        return o.str();
-    };
-    t.setComment("ferro", "particles 1");
-    t.setComment("frame", std::to_string(frame));
-    t.setComment("time", num(sim.time()));
-    t.setComment("fps", num(sim.scene().shot.fps));
-    t.setComment("spacing", num(sim.spacing()));
-    t.setComment("support_radius", num(sim.supportRadius()));
-    t.setComment("particle_mass", num(sim.particleMass()));
-    t.setComment("rest_density", num(sim.restDensity()));
-    t.setComment("scene", sim.scene().path);
-    t.setComment("scene_fingerprint", opt.fingerprint);
-    // The magnets at this frame's time and the fluid's law: later stages evaluate the same
-    // field anywhere from the file alone.
-    writeMagnetComments(t, sim.magnetsNow(), &sim.scene().magnetization);
-    if (sim.magnetizationInterval() > 0)
-        t.setComment("magnetization_interval", std::to_string(sim.magnetizationInterval()));
-    return t;
 }
 
 } // namespace
@@ -187,7 +146,15 @@ void runShot(const SimScene& scene, const RunOptions& opt) {
     if (!resumed) {
         if (opt.resume && !frames.empty())
             throw ParticleFileError(opt.outDir + ": no readable particle frame to resume from");
-        writeParticleFile(particleFramePath(opt.outDir, 0), frameTable(sim, 0, opt));
+        if (scene.shot.preroll > 0) {
+            PrerollOptions po;
+            po.cachePath = opt.prerollCache.empty() ? (fs::path(opt.outDir) / "preroll.ply").string() : opt.prerollCache;
+            po.sceneFingerprint = opt.prerollFingerprint.empty() ? opt.fingerprint : opt.prerollFingerprint;
+            po.quiet = opt.quiet;
+            const PrerollState settled = settleInitialState(scene, po);
+            sim.setState(0.0, settled.x, settled.v, settled.p, settled.H, settled.M);
+        }
+        writeParticleFile(particleFramePath(opt.outDir, 0), frameTable(sim, 0, opt.fingerprint));
     }
     if (!opt.quiet)
         std::cerr << "ferro-sim: " << sim.size() << " particles, spacing " << sim.spacing() * 1e3 << " mm, "
@@ -207,7 +174,7 @@ void runShot(const SimScene& scene, const RunOptions& opt) {
         const size_t stepsBefore = sim.stepCount();
         sim.resetMagneticsCounters();
         sim.advanceTo(frame / fps);
-        writeParticleFile(particleFramePath(opt.outDir, frame), frameTable(sim, frame, opt));
+        writeParticleFile(particleFramePath(opt.outDir, frame), frameTable(sim, frame, opt.fingerprint));
         if (!opt.quiet) {
             const double now = std::chrono::duration<double>(Clock::now() - start).count();
             const double frameSec = std::chrono::duration<double>(Clock::now() - frameStart).count();

@@ -13,6 +13,10 @@ struct RunOptions {
     bool overwrite = false;    ///< discard frames already in outDir and start over
     bool quiet = false;        ///< no progress lines on stderr
     std::string fingerprint;   ///< scene fingerprint written to each file and checked on resume
+    /// [shot] preroll: where the settled state is cached (empty = outDir/preroll.ply), and
+    /// the hash of the sections it depends on (empty = `fingerprint`, the whole scene).
+    std::string prerollCache;
+    std::string prerollFingerprint;
 };
 
 /// Name of frame `frame`'s particle file in `dir`.

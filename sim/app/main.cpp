@@ -24,6 +24,8 @@ int main(int argc, char** argv) {
     auto* resume = app.add_flag("--resume", opt.resume, "continue from the last complete frame in the output directory");
     app.add_flag("--overwrite", opt.overwrite, "delete frames already in the output directory and start over")
         ->excludes(resume);
+    app.add_option("--preroll-cache", opt.prerollCache,
+                   "particle file caching the settled pre-roll state (default OUT/preroll.ply)");
     app.add_flag("--quiet,-q", opt.quiet, "no progress lines on stderr");
     addThreadsOption(app, threads, "worker threads (default: sim.threads, 0 = all cores)");
     const std::vector<ErrorExit> errors = {
@@ -35,6 +37,7 @@ int main(int argc, char** argv) {
         const SceneDocument doc = SceneDocument::load(scenePath, overrides);
         const SimScene scene = parseSimScene(doc);
         opt.fingerprint = doc.fingerprint();
+        opt.prerollFingerprint = doc.fingerprint({"fluid", "container", "sim", "magnetization"});
         const auto limit = limitThreads(threads >= 0 ? threads : scene.solver.threads);
         runShot(scene, opt);
         return kExitOk;

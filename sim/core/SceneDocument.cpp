@@ -567,13 +567,32 @@ void SceneDocument::checkSections(const std::vector<std::string>& known) const
             throw SceneError(locate(*n, path_) + ": " + key + ": unknown section");
 }
 
+std::string hashHex(const std::string& text)
+{
+    char hex[17];
+    std::snprintf(hex, sizeof hex, "%016llx", static_cast<unsigned long long>(fnv1a64(text)));
+    return hex;
+}
+
 std::string SceneDocument::fingerprint() const
 {
     std::ostringstream text;
     text << toml::toml_formatter(*root_);
-    char hex[17];
-    std::snprintf(hex, sizeof hex, "%016llx", static_cast<unsigned long long>(fnv1a64(text.str())));
-    return hex;
+    return hashHex(text.str());
+}
+
+std::string SceneDocument::fingerprint(const std::vector<std::string>& sections) const
+{
+    std::ostringstream text;
+    for (const std::string& name : sections) {
+        text << "[" << name << "]\n";
+        if (const toml::node* n = root_->get(name)) {
+            if (const toml::table* t = n->as_table()) text << toml::toml_formatter(*t);
+            else if (const toml::array* a = n->as_array()) text << toml::toml_formatter(*a);
+        }
+        text << "\n";
+    }
+    return hashHex(text.str());
 }
 
 } // namespace ferro

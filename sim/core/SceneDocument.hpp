@@ -98,6 +98,9 @@ public:
     void checkSections(const std::vector<std::string>& known) const;
     /// Stable hash of the document (after overrides), to detect a changed scene on resume.
     std::string fingerprint() const;
+    /// Stable hash of the named top-level sections only (absent ones count as empty), for
+    /// caches that depend on part of the scene (ferro-sim's pre-roll).
+    std::string fingerprint(const std::vector<std::string>& sections) const;
     const toml::table& root() const;
 
 private:
@@ -105,6 +108,9 @@ private:
     std::string path_;
     std::unique_ptr<toml::table> root_;
 };
+
+/// 16 hex digits of a stable 64-bit hash (FNV-1a) of `text`.
+std::string hashHex(const std::string& text);
 
 /// Shortest round-trip text of a number, so a message shows exactly the value the user
 /// wrote (-1200, 1e-07) rather than a fixed precision; and of a vector, as [x, y, z].

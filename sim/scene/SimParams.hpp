@@ -91,6 +91,14 @@ struct SolverParams {
 struct ShotParams {
     double fps = 30.0;                ///< output frames per second [1/s]
     double duration = 1.0;            ///< simulated time [s]
+    /// Pre-roll [s], >= 0: before frame 0 the scene's initial state is simulated for at most
+    /// this long with every magnet held as it is at t = 0, so the shot starts from a settled
+    /// fluid instead of a released block. 0 = none (frame 0 is the initial fill).
+    double preroll = 0.0;
+    /// The pre-roll stops early once the RMS particle speed is below this [m/s] (checked
+    /// once per frame interval, after the fluid has had time to fall the container's
+    /// height); 0 = always run the whole pre-roll.
+    double prerollRestSpeed = 1e-3;
     /// Frames after frame 0, rounded; at most kMaxFrame (the parser refuses longer shots),
     /// so the cast never overflows an int whatever the fields hold.
     int frameCount() const {

@@ -28,6 +28,8 @@ ShotParams parseShot(const SceneDocument& doc)
     ShotParams p;
     p.fps = r.positive("fps", p.fps);
     p.duration = r.positive("duration", p.duration);
+    p.preroll = r.nonNegative("preroll", p.preroll);
+    p.prerollRestSpeed = r.nonNegative("preroll_rest_speed", p.prerollRestSpeed);
     // Frame numbers are ints with seven digits in file names: blame the key that is
     // further from its default (the one the user most likely set).
     const double frames = p.duration * p.fps;
