@@ -33,6 +33,7 @@ struct TraceFrame {
     double Mc;
     Vec3d x0, n0, e1, e1perp;
     double l;
+    double maxTilt;   // [deg] the drop direction's largest angle from n0 (SpikeParams::maxTilt)
 };
 
 // The tips traced so far; the first tip at lattice coordinates (i, j) wins.
@@ -58,11 +59,16 @@ bool tipPosition(const LatticeTips& lattice, int i, int j, Vec3d& x)
 
 // The field line through x [m] meets the free surface within 0.75 l: the next mapping
 // coordinate s [m] and the surface normal n there (the field at x uses the normal n0).
+// The line is tilted at most maxTilt from n0, as the spikes are: towards the edge of a
+// magnet's pattern the field lies almost in the surface, and a line along it met the surface
+// far away or not at all, so from frame to frame a whole ring of tips came and went as the
+// surface moved by micrometres. If even the tilted line misses, the line along n0.
 bool dropOnSurface(const TraceFrame& f, const Vec3d& x, Vec3d& s, Vec3d& n)
 {
     Vec3d H = f.fields.field(x, f.n0);
     if (!(H.norm() > 0)) H = f.n0;
-    return nearestFreeHit(f.surface, x, H, 0.75 * f.l, s, n);
+    const Vec3d d = growthDirection(H, f.n0, f.maxTilt);
+    return nearestFreeHit(f.surface, x, d, 0.75 * f.l, s, n) || nearestFreeHit(f.surface, x, f.n0, 0.75 * f.l, s, n);
 }
 
 // Supercritical at surface point s with normal n: |M| > M_c.
@@ -187,7 +193,7 @@ void traceLattice(Pattern& pat, const FreeSurface& surface, const SurfaceFields&
 {
     const double l = pat.info.spacing;
     const Vec3d n0 = pat.info.normal, e1 = pat.info.axis;
-    const TraceFrame frame{surface, fields, Mc, pat.info.origin, n0, e1, n0.cross(e1), l};
+    const TraceFrame frame{surface, fields, Mc, pat.info.origin, n0, e1, n0.cross(e1), l, P.maxTilt};
     LatticeTips lattice;
     std::vector<Vec3d> axisTips[6];
     traceAxes(frame, int(std::ceil(diagonal / l)) + 1, lattice, axisTips);

@@ -1,0 +1,213 @@
+#include "spikes/tracker/TipTracker.hpp"
+
+#include "sim/core/ParticleFile.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <sstream>
+#include <cstdint>
+#include <limits>
+#include <unordered_map>
+
+namespace ferro {
+
+namespace {
+
+/// Nearest-vertex queries on a point set, on a uniform hash grid.
+class NearestVertex {
+public:
+    NearestVertex(const std::vector<Vec3>& pts, double cell) : pts_(pts), cell_(cell) {
+        for (uint32_t i = 0; i < pts.size(); ++i) grid_[key(cellOf(pts[i].cast<double>()))].push_back(i);
+    }
+    /// Index of the nearest point to p (searching rings of cells outward).
+    uint32_t nearest(const Vec3d& p) const {
+        const Eigen::Vector3i c = cellOf(p);
+        uint32_t best = 0;
+        double bestD = std::numeric_limits<double>::infinity();
+        for (int ring = 0; ring < 64; ++ring) {
+            for (int dx = -ring; dx <= ring; ++dx)
+                for (int dy = -ring; dy <= ring; ++dy)
+                    for (int dz = -ring; dz <= ring; ++dz) {
+                        if (std::max({std::abs(dx), std::abs(dy), std::abs(dz)}) != ring) continue;
+                        const auto it = grid_.find(key(c + Eigen::Vector3i(dx, dy, dz)));
+                        if (it == grid_.end()) continue;
+                        for (uint32_t i : it->second) {
+                            const double d = (pts_[i].cast<double>() - p).squaredNorm();
+                            if (d < bestD) bestD = d, best = i;
+                        }
+                    }
+            // Every point within ring * cell has been seen once one was found that close.
+            if (bestD <= (ring * cell_) * (ring * cell_)) break;
+        }
+        return best;
+    }
+
+private:
+    Eigen::Vector3i cellOf(const Vec3d& p) const {
+        return Eigen::Vector3i(int(std::floor(p.x() / cell_)), int(std::floor(p.y() / cell_)),
+                               int(std::floor(p.z() / cell_)));
+    }
+    static int64_t key(const Eigen::Vector3i& c) {
+        return (int64_t(c.x() & 0x1fffff) << 42) | (int64_t(c.y() & 0x1fffff) << 21) | int64_t(c.z() & 0x1fffff);
+    }
+    const std::vector<Vec3>& pts_;
+    double cell_;
+    std::unordered_map<int64_t, std::vector<uint32_t>> grid_;
+};
+
+double meanEdge(const TriangleMesh& m) {
+    double sum = 0;
+    size_t n = 0;
+    for (const auto& t : m.triangles)
+        for (int k = 0; k < 3; ++k) {
+            sum += (m.vertices[t[size_t(k)]] - m.vertices[t[size_t((k + 1) % 3)]]).cast<double>().norm();
+            ++n;
+        }
+    return n ? sum / double(n) : 0.0;
+}
+
+} // namespace
+
+std::vector<SpikeTipSample> findTips(const TriangleMesh& spiky, const TriangleMesh& surface,
+                                     const TipFinderParams& params) {
+    std::vector<SpikeTipSample> tips;
+    if (spiky.empty() || surface.empty()) return tips;
+    const std::vector<Vec3d> normals = areaWeightedNormals(surface);
+    const double edge = meanEdge(surface);
+    const NearestVertex near(surface.vertices, std::max(2 * edge, 1e-9));
+
+    const size_t n = spiky.vertices.size();
+    std::vector<double> h(n, 0.0);
+    for (size_t i = 0; i < n; ++i) {
+        const Vec3d p = spiky.vertices[i].cast<double>();
+        const uint32_t j = near.nearest(p);
+        h[i] = (p - surface.vertices[j].cast<double>()).dot(normals[j]);
+    }
+    // One-ring maxima above minHeight.
+    std::vector<char> isMax(n, 1);
+    for (size_t i = 0; i < n; ++i) isMax[i] = h[i] >= params.minHeight;
+    for (const auto& t : spiky.triangles)
+        for (int k = 0; k < 3; ++k)
+            for (int l = 0; l < 3; ++l)
+                if (k != l && h[t[size_t(l)]] > h[t[size_t(k)]]) isMax[t[size_t(k)]] = 0;
+    for (size_t i = 0; i < n; ++i)
+        if (isMax[i]) tips.push_back({spiky.vertices[i].cast<double>(), h[i]});
+    std::sort(tips.begin(), tips.end(), [](const auto& a, const auto& b) { return a.height > b.height; });
+
+    // Two maxima on one spike (a flat-topped tip, remeshing noise): keep the higher of any
+    // two closer than half the median spacing.
+    const double radius = 0.5 * medianTipSpacing(tips);
+    std::vector<SpikeTipSample> kept;
+    for (const auto& t : tips) {
+        bool near2 = false;
+        for (const auto& k : kept) near2 = near2 || (k.position - t.position).norm() < radius;
+        if (!near2) kept.push_back(t);
+    }
+    return kept;
+}
+
+double medianTipSpacing(const std::vector<SpikeTipSample>& tips) {
+    if (tips.size() < 2) return 0.0;
+    std::vector<double> d(tips.size(), std::numeric_limits<double>::infinity());
+    for (size_t i = 0; i < tips.size(); ++i)
+        for (size_t j = 0; j < tips.size(); ++j)
+            if (i != j) d[i] = std::min(d[i], (tips[i].position - tips[j].position).norm());
+    std::nth_element(d.begin(), d.begin() + long(d.size() / 2), d.end());
+    return d[d.size() / 2];
+}
+
+TipFrameMatch matchTips(const std::vector<SpikeTipSample>& a, const std::vector<SpikeTipSample>& b, double gate,
+                        double edgeFraction) {
+    TipFrameMatch m;
+    m.tipsA = int(a.size());
+    m.tipsB = int(b.size());
+    m.spacing = a.size() >= 2 ? medianTipSpacing(a) : medianTipSpacing(b);
+    double hA = 0, hB = 0;
+    for (const auto& t : a) hA = std::max(hA, t.height);
+    for (const auto& t : b) hB = std::max(hB, t.height);
+    m.largestTip = std::max(hA, hB);
+    if (a.empty() && b.empty()) return m;
+
+    struct Pair { double d; uint32_t i, j; };
+    std::vector<Pair> pairs;
+    const double maxD = m.spacing > 0 ? gate * m.spacing : std::numeric_limits<double>::infinity();
+    for (uint32_t i = 0; i < a.size(); ++i)
+        for (uint32_t j = 0; j < b.size(); ++j) {
+            const double d = (a[i].position - b[j].position).norm();
+            if (d < maxD) pairs.push_back({d, i, j});
+        }
+    std::sort(pairs.begin(), pairs.end(), [](const Pair& p, const Pair& q) { return p.d < q.d; });
+    std::vector<char> usedA(a.size(), 0), usedB(b.size(), 0);
+    std::vector<double> moves;
+    int stable = 0, interior = 0, interiorStable = 0;
+    const auto inside = [&](double h, double hmax) { return h >= edgeFraction * hmax; };
+    for (const Pair& p : pairs) {
+        if (usedA[p.i] || usedB[p.j]) continue;
+        usedA[p.i] = usedB[p.j] = 1;
+        moves.push_back(p.d);
+        if (p.d < 0.1 * m.spacing) ++stable;
+        if (inside(a[p.i].height, hA) || inside(b[p.j].height, hB)) {
+            ++interior;
+            interiorStable += p.d < 0.1 * m.spacing;
+        }
+        m.maxHeightJump = std::max(m.maxHeightJump, std::abs(a[p.i].height - b[p.j].height));
+    }
+    for (uint32_t i = 0; i < a.size(); ++i)
+        if (!usedA[i]) {
+            ++m.died;
+            m.interiorDied += inside(a[i].height, hA);
+            interior += inside(a[i].height, hA);
+            m.maxHeightJump = std::max(m.maxHeightJump, a[i].height);
+        }
+    for (uint32_t j = 0; j < b.size(); ++j)
+        if (!usedB[j]) {
+            ++m.born;
+            m.interiorBorn += inside(b[j].height, hB);
+            interior += inside(b[j].height, hB);
+            m.maxHeightJump = std::max(m.maxHeightJump, b[j].height);
+        }
+    m.matched = int(moves.size());
+    if (!moves.empty()) {
+        std::sort(moves.begin(), moves.end());
+        m.medianMove = moves[moves.size() / 2];
+        m.maxMove = moves.back();
+    }
+    m.stableFraction = double(stable) / double(std::max(a.size(), b.size()));
+    m.interiorStableFraction = interior ? double(interiorStable) / double(interior) : 1.0;
+    m.maxHeightJump = m.largestTip > 0 ? m.maxHeightJump / m.largestTip : 0.0;
+    return m;
+}
+
+TipTrack trackTips(const std::string& spikyPattern, const std::string& surfacePattern, int first, int last,
+                   const TipFinderParams& params, double gate, double edgeFraction) {
+    TipTrack track;
+    track.first = first;
+    for (int f = first; f <= last; ++f) {
+        const TriangleMesh spiky = readMesh(framePath(spikyPattern, f));
+        const TriangleMesh surface = readMesh(framePath(surfacePattern, f));
+        track.tips.push_back(findTips(spiky, surface, params));
+        if (track.tips.size() >= 2)
+            track.steps.push_back(matchTips(track.tips[track.tips.size() - 2], track.tips.back(), gate, edgeFraction));
+    }
+    return track;
+}
+
+std::string tipTrackCsv(const TipTrack& track) {
+    std::ostringstream o;
+    o << "frame,tips,matched,born,died,interior_born,interior_died,spacing_mm,median_move_mm,max_move_mm,"
+         "stable_fraction,max_height_jump,largest_tip_mm\n";
+    for (size_t k = 0; k < track.steps.size(); ++k) {
+        const TipFrameMatch& m = track.steps[k];
+        char row[256];
+        std::snprintf(row, sizeof row, "%d,%d,%d,%d,%d,%d,%d,%.4f,%.4f,%.4f,%.4f,%.4f,%.4f\n",
+                      track.first + int(k) + 1, m.tipsB, m.matched, m.born, m.died, m.interiorBorn, m.interiorDied,
+                      1e3 * m.spacing, 1e3 * m.medianMove, 1e3 * m.maxMove, m.stableFraction, m.interiorStableFraction,
+                      m.maxHeightJump,
+                      1e3 * m.largestTip);
+        o << row;
+    }
+    return o.str();
+}
+
+} // namespace ferro

@@ -1,0 +1,84 @@
+#pragma once
+// The tip tracker: finds the spike tips of a spiky mesh and matches them across frames,
+// to measure how coherent the spikes are in motion (tests, the benchmark report, and
+// `ferro-tips` on a shot's frames).
+//
+// It is a measuring tool, independent of how ferro-spikes made the tips: a tip is a vertex
+// of the spiky mesh that stands out of the frame's undisplaced surface mesh (the
+// ferro-surface output the spikes were added to) by at least `minHeight` and is the highest
+// vertex of its one-ring; of two such maxima closer than half the frame's median tip
+// spacing only the higher is kept. Height = distance from the nearest surface vertex's
+// tangent plane, so flat, undisplaced fluid has height ~0 at any surface resolution.
+#include "sim/core/TriangleMesh.hpp"
+
+#include <string>
+#include <vector>
+
+namespace ferro {
+
+struct SpikeTipSample {
+    Vec3d position;     ///< the tip vertex [m]
+    double height = 0;  ///< height above the undisplaced surface [m]
+};
+
+struct TipFinderParams {
+    double minHeight = 2e-4;   ///< a tip stands at least this far out of the surface [m], > 0
+};
+
+/// The tips of `spiky` (a ferro-spikes output) over `surface` (its input). Empty when either
+/// mesh is empty. Sorted by decreasing height.
+std::vector<SpikeTipSample> findTips(const TriangleMesh& spiky, const TriangleMesh& surface,
+                                     const TipFinderParams& params = {});
+
+/// Median distance from each tip to its nearest other tip [m]; 0 with fewer than two tips.
+double medianTipSpacing(const std::vector<SpikeTipSample>& tips);
+
+/// How the tips of one frame (a) became the tips of the next (b).
+struct TipFrameMatch {
+    int tipsA = 0, tipsB = 0;
+    int matched = 0;            ///< pairs matched one to one within the gate
+    int died = 0, born = 0;     ///< tips of a without a match, of b without a match
+    /// Of those, the ones at least `edgeFraction` of the frame's largest tip tall: a tip that
+    /// appears or vanishes inside the spiky region (not at its fading edge).
+    int interiorDied = 0, interiorBorn = 0;
+    double spacing = 0;         ///< tip spacing l: median nearest-tip distance of a (else b) [m]
+    double medianMove = 0;      ///< median distance a matched tip moved [m]
+    double maxMove = 0;         ///< largest distance a matched tip moved [m]
+    /// Matched tips that moved less than 0.1 l, over max(tipsA, tipsB) (1 when both are empty).
+    double stableFraction = 1;
+    /// The same over the interior tips only (at least `edgeFraction` of the largest tip tall in
+    /// either frame): the share of them matched and moved less than 0.1 l.
+    double interiorStableFraction = 1;
+    /// Largest height change of a tip between the frames over the larger of the two frames'
+    /// largest tips: matched tips by their difference, born and died tips by their whole
+    /// height (a tip that appears 3 mm tall jumped 3 mm).
+    double maxHeightJump = 0;
+    double largestTip = 0;      ///< the larger of the two frames' largest tip heights [m]
+};
+
+/// Matches b's tips to a's: pairs in order of increasing distance, each tip used once, only
+/// pairs closer than `gate` x l (l = the spacing of a, else of b).
+TipFrameMatch matchTips(const std::vector<SpikeTipSample>& a, const std::vector<SpikeTipSample>& b,
+                        double gate = 0.5, double edgeFraction = 0.25);
+
+/// A shot's tips over a frame range: the tips of every frame and the match of each frame to
+/// the next.
+struct TipTrack {
+    int first = 0;                                   ///< first frame
+    std::vector<std::vector<SpikeTipSample>> tips;   ///< per frame, first..last
+    std::vector<TipFrameMatch> steps;                ///< steps[k]: frame first+k -> first+k+1
+};
+
+/// Reads frames first..last of the spiky-mesh and surface-mesh patterns ({:04} / %04d
+/// placeholders, as every stage takes them) and tracks their tips. Throws MeshFileError
+/// (missing 4 / malformed 2) at the first frame that cannot be read.
+TipTrack trackTips(const std::string& spikyPattern, const std::string& surfacePattern, int first, int last,
+                   const TipFinderParams& params = {}, double gate = 0.5, double edgeFraction = 0.25);
+
+/// The track as CSV: one row per step (frame, tips, matched, born, died, interior_born,
+/// interior_died, spacing_mm, median_move_mm, max_move_mm, stable_fraction, interior_stable_fraction,
+/// max_height_jump,
+/// largest_tip_mm).
+std::string tipTrackCsv(const TipTrack& track);
+
+} // namespace ferro

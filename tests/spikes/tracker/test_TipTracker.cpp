@@ -1,0 +1,115 @@
+// The tip tracker (spikes/tracker): tips found on a pool with bumps at known places and
+// heights, and frame-to-frame matching on tip sets whose answer is known by construction.
+#include "spikes/tracker/TipTracker.hpp"
+#include "tests/spikes/SpikeTestMeshes.hpp"
+
+#include <catch2/catch.hpp>
+
+#include <cmath>
+
+using namespace ferro;
+
+namespace {
+
+constexpr double kSpacing = 5e-3;   // tip spacing of the synthetic lattice [m]
+
+struct TrueTip { double x, y, h; };
+
+/// Hexagonal lattice tips within radius R, heights falling from hCentre to a quarter at R.
+std::vector<TrueTip> lattice(double R, double hCentre) {
+    std::vector<TrueTip> tips;
+    for (int i = -10; i <= 10; ++i)
+        for (int j = -10; j <= 10; ++j) {
+            const double x = kSpacing * (i + 0.5 * j), y = kSpacing * (std::sqrt(3.0) / 2 * j);
+            const double r = std::hypot(x, y);
+            if (r <= R) tips.push_back({x, y, hCentre * (1 - 0.75 * r / R)});
+        }
+    return tips;
+}
+
+/// The flat pool (depth 5 mm, radius 30 mm) with a smooth bump cos^2 of half-width 0.45 l
+/// under every tip.
+TriangleMesh spiky(const std::vector<TrueTip>& tips) {
+    return spiketest::makePool(0.03, 120, [&](double r, double a) {
+        const double x = r * std::cos(a), y = r * std::sin(a);
+        double z = 0.005;
+        for (const TrueTip& t : tips) {
+            const double d = std::hypot(x - t.x, y - t.y) / (0.45 * kSpacing);
+            if (d < 1) z += t.h * std::pow(std::cos(0.5 * M_PI * d), 2);
+        }
+        return z;
+    });
+}
+
+SpikeTipSample sample(double x, double y, double h) { return {Vec3d(x, y, 0.005 + h), h}; }
+
+} // namespace
+
+TEST_CASE("findTips finds every bump of a pool at its place and height, and nothing on a flat pool", "[tips]") {
+    const TriangleMesh surface = spiketest::makeFlatPool(0.03, 0.005, 120);
+    REQUIRE(findTips(surface, surface).empty());
+
+    const std::vector<TrueTip> truth = lattice(0.02, 3e-3);
+    const std::vector<SpikeTipSample> found = findTips(spiky(truth), surface);
+    REQUIRE(found.size() == truth.size());
+    // The mesh has a vertex every 0.25 mm: a tip is found at the vertex nearest its apex.
+    for (const TrueTip& t : truth) {
+        double best = 1e9, h = 0;
+        for (const SpikeTipSample& f : found) {
+            const double d = std::hypot(f.position.x() - t.x, f.position.y() - t.y);
+            if (d < best) best = d, h = f.height;
+        }
+        REQUIRE(best < 0.25e-3);
+        REQUIRE(h == Approx(t.h).epsilon(0.02));
+    }
+    REQUIRE(medianTipSpacing(found) == Approx(kSpacing).epsilon(0.05));
+}
+
+TEST_CASE("matchTips counts matches, moves, births and deaths of known tip sets", "[tips]") {
+    // Frame a: a row of five tips 5 mm apart, the last one small (the fading edge).
+    const std::vector<SpikeTipSample> a = {sample(0, 0, 3e-3), sample(0.005, 0, 3e-3), sample(0.010, 0, 2e-3),
+                                           sample(0.015, 0, 2e-3), sample(0.020, 0, 0.5e-3)};
+    SECTION("all tips kept, shifted by 0.2 mm and 1 mm") {
+        std::vector<SpikeTipSample> b = a;
+        for (size_t i = 0; i < b.size(); ++i) b[i].position.y() += i < 3 ? 0.2e-3 : 1e-3;
+        const TipFrameMatch m = matchTips(a, b);
+        REQUIRE(m.matched == 5);
+        REQUIRE(m.born + m.died == 0);
+        REQUIRE(m.spacing == Approx(0.005));
+        REQUIRE(m.medianMove == Approx(0.2e-3).margin(1e-9));
+        REQUIRE(m.maxMove == Approx(1e-3).margin(1e-9));
+        REQUIRE(m.stableFraction == Approx(3.0 / 5));          // 0.2 mm < 0.1 l = 0.5 mm < 1 mm
+        REQUIRE(m.interiorStableFraction == Approx(3.0 / 4));  // the 0.5 mm tip is edge (< 0.25 x 3 mm)
+        REQUIRE(m.maxHeightJump == 0);
+    }
+    SECTION("the small edge tip vanishes, a tall one appears inside, one grows") {
+        std::vector<SpikeTipSample> b(a.begin(), a.end() - 1);
+        b[1].height = 3.6e-3;
+        b[1].position.z() += 0.6e-3;
+        b.push_back(sample(0.0025, 0.004, 2.4e-3));
+        const TipFrameMatch m = matchTips(a, b);
+        REQUIRE(m.matched == 4);
+        REQUIRE(m.died == 1);
+        REQUIRE(m.interiorDied == 0);
+        REQUIRE(m.born == 1);
+        REQUIRE(m.interiorBorn == 1);
+        REQUIRE(m.largestTip == Approx(3.6e-3));
+        // The newcomer jumped from 0 to 2.4 mm: 2.4 / 3.6 of the largest tip.
+        REQUIRE(m.maxHeightJump == Approx(2.4 / 3.6));
+        // Of the interior tips (a's four tall ones, the newcomer), the grown tip moved 0.6 mm.
+        REQUIRE(m.interiorStableFraction == Approx(3.0 / 5));
+    }
+    SECTION("a tip further than half a spacing is a death and a birth, not a move") {
+        std::vector<SpikeTipSample> b = a;
+        b[0].position.y() += 3e-3;
+        const TipFrameMatch m = matchTips(a, b);
+        REQUIRE(m.matched == 4);
+        REQUIRE(m.born == 1);
+        REQUIRE(m.died == 1);
+    }
+    SECTION("no tips in either frame") {
+        const TipFrameMatch m = matchTips({}, {});
+        REQUIRE(m.stableFraction == 1);
+        REQUIRE(m.matched == 0);
+    }
+}
