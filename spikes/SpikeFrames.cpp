@@ -72,15 +72,16 @@ std::string formatDouble(double v)
 
 namespace {
 
+// The frame's time [s]: header `time`, else `frame` / fps (particle file first, then the
+// mesh), else frameHint / fps, else 0.
+
 // The frame's magnets, in order of preference: the particle file's header (when there is a
 // particle file), the mesh's header, the scene's tracks at the frame's time (header `time`,
 // else `frame` / fps, else frameHint / fps, else 0 s). Throws ParticleFileError on a
 // malformed magnet header.
-std::vector<Magnet> frameMagnets(const SpikeScene& scene, const ParticleTable& particles, bool haveParticles,
-                                 const ParticleTable& meshHeader, int frameHint)
+double frameTime(const SpikeScene& scene, const ParticleTable& particles, const ParticleTable& meshHeader,
+                 int frameHint)
 {
-    if (haveParticles && hasComment(particles.comments, "magnet_count")) return readMagnetComments(particles);
-    if (hasComment(meshHeader.comments, "magnet_count")) return readMagnetComments(meshHeader);
     double time = std::nan("");
     for (const ParticleTable* t : {&particles, &meshHeader}) {
         if (!std::isnan(time)) break;
@@ -91,9 +92,41 @@ std::vector<Magnet> frameMagnets(const SpikeScene& scene, const ParticleTable& p
         }
     }
     if (std::isnan(time)) time = frameHint >= 0 ? frameHint / scene.fps : 0.0;
+    return time;
+}
+
+std::vector<Magnet> frameMagnets(const SpikeScene& scene, const ParticleTable& particles, bool haveParticles,
+                                 const ParticleTable& meshHeader, int frameHint)
+{
+    if (haveParticles && hasComment(particles.comments, "magnet_count")) return readMagnetComments(particles);
+    if (hasComment(meshHeader.comments, "magnet_count")) return readMagnetComments(meshHeader);
+    const double time = frameTime(scene, particles, meshHeader, frameHint);
     std::vector<Magnet> magnets;
     for (const MagnetTrack& track : scene.magnets) magnets.push_back(track.at(time));
     return magnets;
+}
+
+// SpikeParams::growthTime: the magnets at kHistorySteps earlier times a quarter growth time
+// apart (4 growth times back, the tail beyond weighs e^-4), from the scene's tracks, with
+// exponential weights summing to 1. Only when the tracks are the frame's magnets (same
+// count): a frame whose magnets come from a file the scene does not describe has no past.
+void addMagnetHistory(const SpikeScene& scene, double time, SpikeInput& in)
+{
+    constexpr int kHistorySteps = 16;
+    const double tau = scene.params.growthTime;
+    if (!(tau > 0) || scene.magnets.empty() || scene.magnets.size() != in.magnets.size()) return;
+    const double step = tau / 4;
+    double total = 0;
+    for (int k = 0; k <= kHistorySteps; ++k) {
+        const double w = std::exp(-k * step / tau);
+        in.pastWeights.push_back(w);
+        total += w;
+        if (k == 0) continue;
+        std::vector<Magnet> past;
+        for (const MagnetTrack& track : scene.magnets) past.push_back(track.at(time - k * step));
+        in.pastMagnets.push_back(std::move(past));
+    }
+    for (double& w : in.pastWeights) w /= total;
 }
 
 // The field [A/m] of the magnetized particles (positions x [m], magnetization M [A/m]) at a
@@ -192,6 +225,7 @@ SpikeInput loadSpikeInput(const SpikeScene& scene, const std::string& surfacePat
         throw SpikeInputError(surfacePath + ": negative susceptibility or saturation in the header");
 
     if (haveParticles && particles.rows() > 0) loadParticles(scene, particles, particlePath, in);
+    addMagnetHistory(scene, frameTime(scene, particles, meshHeader, frameHint), in);
     return in;
 }
 

@@ -79,7 +79,9 @@ bool alive(const TraceFrame& f, const Vec3d& s, const Vec3d& n)
 
 // Fig. 7b: adds the origin tip and traces the six axes from x0 along the surface with step l
 // (eq. 15: along the tangent at the previous tip), at most maxRings tips per axis, until two
-// subcritical tips in a row. Returns per axis k the traced points, x0 first [m].
+// subcritical tips in a row after a supercritical one (a subcritical origin, the top of a
+// heap less magnetized than its flanks, does not end the axis). Returns per axis k the
+// traced points, x0 first [m].
 void traceAxes(const TraceFrame& f, int maxRings, LatticeTips& lattice, std::vector<Vec3d> (&axisTips)[6])
 {
     const double l = f.l;
@@ -89,6 +91,7 @@ void traceAxes(const TraceFrame& f, int maxRings, LatticeTips& lattice, std::vec
         Vec3d d = std::cos(k * kPi / 3) * f.e1 + std::sin(k * kPi / 3) * f.e1perp;
         axisTips[k].push_back(f.x0);
         int dead = 0;
+        bool lived = alive(f, f.x0, f.n0); // an axis ends two dead tips after its last live one
         for (int ring = 1; ring <= maxRings && dead < 2; ++ring) {
             d = d - d.dot(n) * n; // eq. 15: step along the tangent at the previous tip
             if (!(d.norm() > 1e-12)) break;
@@ -99,7 +102,9 @@ void traceAxes(const TraceFrame& f, int maxRings, LatticeTips& lattice, std::vec
             n = nextNormal;
             axisTips[k].push_back(s);
             addTip(lattice, ring * kAxis[k][0], ring * kAxis[k][1], s, n);
-            dead = alive(f, s, n) ? 0 : dead + 1;
+            const bool live = alive(f, s, n);
+            lived = lived || live;
+            dead = live ? 0 : lived ? dead + 1 : 0;
         }
     }
 }

@@ -155,8 +155,11 @@ std::vector<Pattern> placePatterns(const PlacementContext& c, double g, double M
         Vec3d x0, n0;
         if (!patternOrigin(c, magnet, axisDir, up, x0, n0)) continue;
         const Vec3d H0 = c.fields.field(x0, n0);
+        // The origin is the lattice's anchor, not its trigger: the pattern exists as soon as
+        // any of the surface is supercritical (addSpikes returns early otherwise). A heap's
+        // top can be less magnetized than its flanks; waiting for the origin to pass M_c let
+        // the flanks' tips appear already 30 % tall, all in one frame.
         const double M0 = c.fields.magnetization(x0, H0);
-        if (!(M0 > Mc)) continue;
         // The magnet must dominate its own origin (two coaxial magnets make one pattern).
         double total2 = 0;
         for (const Magnet& other : in.magnets) total2 += magnetField(other, x0).squaredNorm();

@@ -64,6 +64,11 @@ struct SpikeInput {
     SpikeParticles particles;
     /// Field of the magnetized particles at a point [A/m] (null = magnets only).
     std::function<Vec3d(const Vec3d&)> particleField;
+    /// The magnets' recent past for SpikeParams::growthTime: the magnets at earlier times,
+    /// pastWeights[k] the weight of pastMagnets[k]; pastWeights.front() is the weight of
+    /// `magnets` (now). Empty = no lag.
+    std::vector<std::vector<Magnet>> pastMagnets;
+    std::vector<double> pastWeights;
 };
 
 /// One hexagonal pattern (one magnet).

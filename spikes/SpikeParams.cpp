@@ -22,6 +22,7 @@ SpikeParams parseSpikeParams(const SceneDocument& doc)
     if (!(p.sharpness >= 1.0 && p.sharpness <= 8.0))
         r.fail("sharpness", "must be in [1, 8]");
     p.magnetizationFade = r.positive("magnetization_fade", p.magnetizationFade);
+    p.growthTime = r.nonNegative("growth_time", p.growthTime);
     p.wallMargin = r.nonNegative("wall_margin", p.wallMargin);
     p.wallFade = r.nonNegative("wall_fade", p.wallFade);
     p.resolution = r.number("resolution", p.resolution);

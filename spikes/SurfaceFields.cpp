@@ -40,7 +40,7 @@ Vec3d SurfaceFields::field(const Vec3d& x, const Vec3d& n) const
     return H;
 }
 
-double SurfaceFields::magnetization(const Vec3d& x, const Vec3d& H) const
+double SurfaceFields::currentMagnetization(const Vec3d& x, const Vec3d& H) const
 {
     if (particleGrid_) {
         double sum = 0, weight = 0;
@@ -54,6 +54,27 @@ double SurfaceFields::magnetization(const Vec3d& x, const Vec3d& H) const
         if (weight > 0) return sum / weight;
     }
     return langevinMagnetization(H.norm(), in_.fluid.law.susceptibility, in_.fluid.law.saturation);
+}
+
+double SurfaceFields::magnetization(const Vec3d& x, const Vec3d& H) const
+{
+    const double M = currentMagnetization(x, H);
+    if (in_.pastMagnets.empty()) return M;
+    // The past magnetization at x scales with the law at the magnets' past field there
+    // (the particles' share of the field, |H| / |H_magnets| now, taken as fixed over the
+    // short history).
+    const double Hm = magnetField(in_.magnets, x).norm();
+    if (!(Hm > 0)) return M;
+    const double scale = H.norm() / Hm;
+    const MagnetizationParams& law = in_.fluid.law;
+    const double now = langevinMagnetization(scale * Hm, law.susceptibility, law.saturation);
+    if (!(now > 0)) return M;
+    double past = in_.pastWeights[0] * now;
+    for (size_t k = 0; k < in_.pastMagnets.size(); ++k)
+        past += in_.pastWeights[k + 1] *
+                langevinMagnetization(scale * magnetField(in_.pastMagnets[k], x).norm(), law.susceptibility,
+                                      law.saturation);
+    return M * past / now;
 }
 
 double SurfaceFields::magnetizationFade(double M) const

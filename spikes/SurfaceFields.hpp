@@ -41,6 +41,9 @@ public:
 
     /// |M| [A/m] at a surface point: the particles' M around it (a Shepard average with weight
     /// (1 - d^2/r^2)^3, r = two particle spacings), else the fluid's law at the local field H.
+    double currentMagnetization(const Vec3d& x, const Vec3d& H) const;
+    /// The |M| spikes respond to: currentMagnetization averaged over the recent past
+    /// (SpikeParams::growthTime, SpikeInput::pastMagnets); equal to it in a still field.
     double magnetization(const Vec3d& x, const Vec3d& H) const;
 
     /// 0 at M_c, 1 from (1 + fade) M_c on, smooth: scales each spike's height (taken at its tip,

@@ -196,11 +196,11 @@ TipTrack trackTips(const std::string& spikyPattern, const std::string& surfacePa
 std::string tipTrackCsv(const TipTrack& track) {
     std::ostringstream o;
     o << "frame,tips,matched,born,died,interior_born,interior_died,spacing_mm,median_move_mm,max_move_mm,"
-         "stable_fraction,max_height_jump,largest_tip_mm\n";
+         "stable_fraction,interior_stable_fraction,max_height_jump,largest_tip_mm\n";
     for (size_t k = 0; k < track.steps.size(); ++k) {
         const TipFrameMatch& m = track.steps[k];
         char row[256];
-        std::snprintf(row, sizeof row, "%d,%d,%d,%d,%d,%d,%d,%.4f,%.4f,%.4f,%.4f,%.4f,%.4f\n",
+        std::snprintf(row, sizeof row, "%d,%d,%d,%d,%d,%d,%d,%.4f,%.4f,%.4f,%.4f,%.4f,%.4f,%.4f\n",
                       track.first + int(k) + 1, m.tipsB, m.matched, m.born, m.died, m.interiorBorn, m.interiorDied,
                       1e3 * m.spacing, 1e3 * m.medianMove, 1e3 * m.maxMove, m.stableFraction, m.interiorStableFraction,
                       m.maxHeightJump,
