@@ -84,8 +84,7 @@ double spikeDisplacement(const SpikeSurface& surface, const Vec3d& x, const Vec3
     direction = nx;
     if (fields.wetted(x)) return 0;
     const Vec3d H = fields.field(x, nx);
-    const double M = fields.magnetization(x, H);
-    const double fade = fields.magnetizationGate(M) *
+    const double fade = fields.surfaceGate(x, H) *
                         (wall.grid.empty() ? 1.0 : smoothstep01(wall.grid.nearestDistance(x, wall.fade) / wall.fade));
     if (fade <= 0) return 0;
     // Per pattern: eq. 13 from every nearby tip's lattice map, blended by a smooth partition
@@ -112,7 +111,7 @@ double spikeDisplacement(const SpikeSurface& surface, const Vec3d& x, const Vec3
     constexpr double eps = 1e-3;
     double spacing = 0;
     for (size_t p = 0; p < patterns.size(); ++p) spacing += dominance.share(p) * patterns[p].info.spacing;
-    const double localC0 = std::min(P.beta * H.norm(), P.maxAspect * spacing / 3.0) * fields.magnetizationFade(M);
+    const double localC0 = std::min(P.beta * H.norm(), P.maxAspect * spacing / 3.0) * fields.heightFade(x, H);
     const double C0 = (A + eps * localC0) / (WA + eps);
     const Vec3d dir = growthDirection(D + eps * growthDirection(H, nx, P.maxTilt), nx, P.maxTilt);
     weight = fade * coverage;

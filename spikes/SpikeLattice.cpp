@@ -210,7 +210,7 @@ void traceLattice(Pattern& pat, const FreeSurface& surface, const SurfaceFields&
     for (Tip& tip : pat.tips) {
         const Vec3d H = fields.field(tip.position, tip.normal);
         tip.amplitude = std::min(P.beta * H.norm(), P.maxAspect * l / 3.0) *
-                        fields.magnetizationFade(fields.magnetization(tip.position, H));
+                        fields.heightFade(tip.position, H);
         tip.direction = growthDirection(H, tip.normal, P.maxTilt);
     }
     std::vector<Vec3d> positions;

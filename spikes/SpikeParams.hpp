@@ -25,11 +25,11 @@ struct SpikeParams {
     double sharpness = 1.0;          ///< profile exponent p >= 1: 1 = eq. 13 exactly; larger p narrows
                                      ///< the spikes into cones over flat troughs (same tips, same spacing)
     double magnetizationFade = 0.25; ///< height ramps from 0 at |M| = M_c to full at (1 + fade) M_c
-    /// Spikes follow the field with this time constant [s], >= 0: the |M| that decides where
-    /// spikes stand and how tall is the magnetization averaged over the past with weight
-    /// exp(-(t - t') / growthTime), the past taken from the scene's magnet tracks (so a frame
-    /// is still made alone, in any order). A field that jumps makes spikes grow over a few
-    /// frames instead of popping in; a still field gives the instantaneous pattern. 0 = the
+    /// Spikes follow the field with this time constant [s], >= 0: a spike's height is the
+    /// heights its |M| gave over the past, averaged with weight exp(-(t - t') / growthTime),
+    /// the past taken from the scene's magnet tracks (so a frame is still made alone, in any
+    /// order). A field that jumps on grows spikes over a few frames instead of popping them in;
+    /// one that goes lets them sink; a still field gives the instantaneous pattern. 0 = the
     /// paper (instantaneous).
     double growthTime = 0.1;
     double wallMargin = 0.0;         ///< surface closer than this to a container wall is wetted wall,

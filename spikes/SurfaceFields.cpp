@@ -56,25 +56,49 @@ double SurfaceFields::currentMagnetization(const Vec3d& x, const Vec3d& H) const
     return langevinMagnetization(H.norm(), in_.fluid.law.susceptibility, in_.fluid.law.saturation);
 }
 
-double SurfaceFields::magnetization(const Vec3d& x, const Vec3d& H) const
+std::vector<double> SurfaceFields::magnetizationHistory(const Vec3d& x, const Vec3d& H) const
 {
     const double M = currentMagnetization(x, H);
-    if (in_.pastMagnets.empty()) return M;
+    std::vector<double> history{M};
+    if (in_.pastMagnets.empty()) return history;
     // The past magnetization at x scales with the law at the magnets' past field there
     // (the particles' share of the field, |H| / |H_magnets| now, taken as fixed over the
     // short history).
     const double Hm = magnetField(in_.magnets, x).norm();
-    if (!(Hm > 0)) return M;
-    const double scale = H.norm() / Hm;
+    const double scale = Hm > 0 ? H.norm() / Hm : 1.0;
     const MagnetizationParams& law = in_.fluid.law;
     const double now = langevinMagnetization(scale * Hm, law.susceptibility, law.saturation);
-    if (!(now > 0)) return M;
-    double past = in_.pastWeights[0] * now;
-    for (size_t k = 0; k < in_.pastMagnets.size(); ++k)
-        past += in_.pastWeights[k + 1] *
-                langevinMagnetization(scale * magnetField(in_.pastMagnets[k], x).norm(), law.susceptibility,
-                                      law.saturation);
-    return M * past / now;
+    for (const std::vector<Magnet>& past : in_.pastMagnets) {
+        const double then = langevinMagnetization(scale * magnetField(past, x).norm(), law.susceptibility,
+                                                  law.saturation);
+        // No field now (a magnet just switched off): the law's past value, unscaled.
+        history.push_back(now > 0 ? M * then / now : then);
+    }
+    return history;
+}
+
+double SurfaceFields::magnetization(const Vec3d& x, const Vec3d& H) const
+{
+    const std::vector<double> h = magnetizationHistory(x, H);
+    return *std::max_element(h.begin(), h.end());
+}
+
+double SurfaceFields::heightFade(const Vec3d& x, const Vec3d& H) const
+{
+    const std::vector<double> h = magnetizationHistory(x, H);
+    if (h.size() == 1) return magnetizationFade(h[0]);
+    double f = 0;
+    for (size_t k = 0; k < h.size(); ++k) f += in_.pastWeights[k] * magnetizationFade(h[k]);
+    return f;
+}
+
+double SurfaceFields::surfaceGate(const Vec3d& x, const Vec3d& H) const
+{
+    const std::vector<double> h = magnetizationHistory(x, H);
+    if (h.size() == 1) return magnetizationGate(h[0]);
+    double f = 0;
+    for (size_t k = 0; k < h.size(); ++k) f += in_.pastWeights[k] * magnetizationGate(h[k]);
+    return f;
 }
 
 double SurfaceFields::magnetizationFade(double M) const

@@ -7,6 +7,7 @@
 
 #include <algorithm>
 #include <memory>
+#include <vector>
 
 namespace ferro {
 
@@ -42,9 +43,17 @@ public:
     /// |M| [A/m] at a surface point: the particles' M around it (a Shepard average with weight
     /// (1 - d^2/r^2)^3, r = two particle spacings), else the fluid's law at the local field H.
     double currentMagnetization(const Vec3d& x, const Vec3d& H) const;
-    /// The |M| spikes respond to: currentMagnetization averaged over the recent past
-    /// (SpikeParams::growthTime, SpikeInput::pastMagnets); equal to it in a still field.
+    /// |M| at x now and at the input's past times (SpikeInput::pastMagnets): now first, the
+    /// past ones scaled by the law at the magnets' past field there.
+    std::vector<double> magnetizationHistory(const Vec3d& x, const Vec3d& H) const;
+    /// The largest |M| of the history: where spikes stand, grow or still fade out (the
+    /// mapping area, the pattern, the lattice's extent). currentMagnetization in a still field.
     double magnetization(const Vec3d& x, const Vec3d& H) const;
+    /// magnetizationFade and magnetizationGate averaged over the history with
+    /// SpikeInput::pastWeights (SpikeParams::growthTime): a spike's height follows its past
+    /// heights, so a field that jumps on grows the spikes over a few growth times.
+    double heightFade(const Vec3d& x, const Vec3d& H) const;
+    double surfaceGate(const Vec3d& x, const Vec3d& H) const;
 
     /// 0 at M_c, 1 from (1 + fade) M_c on, smooth: scales each spike's height (taken at its tip,
     /// so a spike at the area's edge is lower but still a symmetric cone).

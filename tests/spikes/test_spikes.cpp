@@ -8,6 +8,7 @@
 #include "spikes/SpikeFrames.hpp"
 #include "spikes/SpikeMapper.hpp"
 #include "spikes/SurfaceGeometry.hpp"
+#include "tests/TestUtil.hpp"
 
 #include <catch2/catch.hpp>
 #include <Eigen/Geometry>
@@ -341,4 +342,37 @@ TEST_CASE("two magnets: each makes a pattern, tips lean along the field lines", 
     REQUIRE(maxTilt > 10.0); // the field really leans the spikes
     REQUIRE(worst < 5.0);
     requireHealthy(res);
+}
+
+TEST_CASE("spikes grow over spikes.growth_time after the field jumps on, and equal the instant pattern once it is still",
+          "[spikes][growth]")
+{
+    const double R = 0.03;
+    // A uniform field off until t = 1 s, then 15 kA/m (1.4x critical) in a millisecond.
+    const std::string text = sceneText(R, uniformField(15000) +
+                                              "[[magnets.keys]]\ntime = 0.0\nfield = 0.0\n"
+                                              "[[magnets.keys]]\ntime = 1.0\nfield = 0.0\n"
+                                              "[[magnets.keys]]\ntime = 1.001\nfield = 15000.0\n");
+    const SpikeScene lagged = scene(text), instant = scene(text, {"spikes.growth_time=0"});
+    REQUIRE(lagged.params.growthTime == 0.1);
+    ferro::test::TempDir dir("growth");
+    auto frame = [&](const SpikeScene& sc, double t) {
+        TriangleMesh pool = makeFlatPool(R, kDepth, 20);
+        setComment(pool, "time", std::to_string(t));
+        const std::string in = dir.file("pool.ply"), out = dir.file("spiky.ply");
+        writeMesh(in, pool);
+        return spikeFrame(sc, in, "", out);
+    };
+    const SpikeResult full = frame(instant, 1.5);
+    REQUIRE(full.maxHeight > 0);
+    // One frame (1/30 s) after the jump the instant pattern is at full height; the lagged one
+    // has not started (its |M| is the past average, below M_c), then grows.
+    REQUIRE(frame(instant, 1.0 + 1.0 / 30).maxHeight == Approx(full.maxHeight));
+    const double h1 = frame(lagged, 1.0 + 1.0 / 30).maxHeight, h3 = frame(lagged, 1.1).maxHeight, h6 = frame(lagged, 1.2).maxHeight;
+    WARN("lagged tallest tip after the jump: 1/30 s " << h1 * 1e3 << " mm, 0.1 s " << h3 * 1e3 << " mm, 0.2 s "
+                                                      << h6 * 1e3 << " mm, instant " << full.maxHeight * 1e3 << " mm");
+    REQUIRE(h1 < 0.5 * full.maxHeight);
+    REQUIRE(h6 > h1);
+    // Four growth times later the past is the present: the same mesh as without the lag.
+    REQUIRE(frame(lagged, 1.5).mesh.vertices == full.mesh.vertices);
 }
