@@ -68,12 +68,12 @@ public:
     /// The explicit update's viscous step limit kExplicitViscousStep h^2 / nu [s] (1e30
     /// without viscosity); it bounds the step only when viscosity is explicit.
     double explicitViscousTimeStep() const;
-    /// Stable explicit viscous step as a fraction of h^2 / nu (h the support radius). The
-    /// viscous operator's largest rate on a resting lattice at rest density, measured by
-    /// power iteration (tests/sim/sph/test_Viscosity.cpp), is lambda_max = 24.6 nu / h^2
-    /// in the interior, so forward Euler is stable for dt < 2 / lambda_max = 0.081 h^2 / nu.
-    /// The former 0.125 lay beyond it. 0.04 keeps half of that margin for the free surface
-    /// and the walls, where rho_i + rho_j is smaller and the rate larger.
+    /// Stable explicit viscous step as a fraction of h^2 / nu (h the support radius). Power
+    /// iteration on the viscous operator of the resting tank of examples/hydrostatic.toml
+    /// (free surface, walls; tests/sim/sph/test_Viscosity.cpp) gives its fastest rate as
+    /// lambda_max = 58 nu / h^2, so forward Euler is stable for dt < 2 / lambda_max =
+    /// 0.0345 h^2 / nu. The former 0.125 lay 3.6 times beyond it (issue 15: 9.9 m/s in two
+    /// frames at nu = 1e-2). 0.02 keeps a margin of 1.7 for disordered fluid.
     static constexpr double kExplicitViscousStep = 0.02;
     /// The pressure solver's label ("DFSPH", "WCSPH"), for progress lines and benchmarks.
     const char* pressureSolverLabel() const { return solverEntry_->label; }
