@@ -345,7 +345,7 @@ TEST_CASE("a resting tank stays at rest at nu = 0.1 and 1 m^2/s (WCSPH)", "[sph]
     checkTank("wcsph", {{1e-1, "auto"}, {1.0, "auto"}});
 }
 
-TEST_CASE("fluid.viscosity_method: auto keeps water explicit, takes implicit for thick fluids; bad values refused",
+TEST_CASE("fluid.viscosity_method: auto keeps water explicit and takes implicit for thick fluids, bad values are refused",
           "[sph][viscosity]") {
     {
         FluidSimulation sim(loadSimScene(example("hydrostatic.toml"), {}));
