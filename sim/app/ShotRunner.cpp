@@ -158,7 +158,7 @@ void runShot(const SimScene& scene, const RunOptions& opt) {
     }
     if (!opt.quiet)
         std::cerr << "ferro-sim: " << sim.size() << " particles, spacing " << sim.spacing() * 1e3 << " mm, "
-                  << sim.pressureSolverLabel() << ", "
+                  << sim.pressureSolverLabel() << (sim.implicitViscosity() ? " + implicit viscosity" : "") << ", "
                   << sim.boundaryPositions().size() << " boundary particles"
                   << magnetSummary(sim) << "; "
                   << (resumed ? "resuming after frame " + std::to_string(frame) : std::string("starting"))
@@ -194,6 +194,11 @@ void runShot(const SimScene& scene, const RunOptions& opt) {
                     std::snprintf(buf, sizeof buf, " NOT CONVERGED (residual %.1e > tolerance/10)", fm->stats().residual);
                     mag += buf;
                 }
+            }
+            if (sim.implicitViscosity()) { // the implicit viscosity solve of the frame's last step
+                char buf[80];
+                std::snprintf(buf, sizeof buf, "  visc it %d (res %.1e)", st.viscosityIterations, st.viscosityResidual);
+                mag += buf;
             }
             std::fprintf(stderr,
                          "frame %4d/%d  t %.4f s  %5zu steps  %6.1f steps/s  dt %.2e s  iter p %d d %d  "

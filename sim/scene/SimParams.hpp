@@ -30,6 +30,13 @@ struct FluidBlock {
 struct FluidParams {
     double restDensity = 1000.0;  ///< rho0 [kg/m^3]
     double viscosity = 1e-6;      ///< kinematic viscosity nu [m^2/s]
+    /// How viscosity enters the step (`fluid.viscosity_method`). Explicit: in the force
+    /// sweep, with the viscous time step limit. Implicit: a backward Euler solve after the
+    /// other forces (Weiler et al. 2018, sim/sph/ImplicitViscosity), stable at any step, so
+    /// the viscous limit does not bind. Auto (default): implicit when the explicit viscous
+    /// limit would be shorter than the step the scene takes otherwise (FluidSimulation).
+    enum class ViscosityMethod { Explicit, Implicit, Auto };
+    ViscosityMethod viscosityMethod = ViscosityMethod::Auto;
     double surfaceTension = 0.0;  ///< sigma [N/m]; 0 disables surface tension
     double spacing = 0.0;         ///< particle spacing [m]; 0 = derived from a block's count
     std::vector<FluidBlock> blocks;
@@ -84,6 +91,10 @@ struct SolverParams {
     /// millimetre spacing cannot resolve the tiny physical viscosity of water or oil; this
     /// damps particle noise without depending on the time step.
     double artificialViscosity = 0.02;
+    /// Implicit viscosity: relative residual |v* - (I + dt L) v| / |v*| at which the
+    /// conjugate gradient solve stops, dimensionless; default 1e-3.
+    double viscosityTolerance = 1e-3;
+    int viscosityMaxIterations = 100; ///< implicit viscosity: iteration cap of each solve
     int threads = 0;                  ///< worker threads; 0 = all cores
 };
 

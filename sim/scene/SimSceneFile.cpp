@@ -71,6 +71,10 @@ FluidParams parseFluid(const SceneDocument& doc)
     FluidParams p;
     p.restDensity = r.positive("rest_density", p.restDensity);
     p.viscosity = r.nonNegative("viscosity", p.viscosity);
+    const std::string method = r.choice("viscosity_method", {"auto", "explicit", "implicit"}, "auto");
+    p.viscosityMethod = method == "explicit"   ? FluidParams::ViscosityMethod::Explicit
+                        : method == "implicit" ? FluidParams::ViscosityMethod::Implicit
+                                               : FluidParams::ViscosityMethod::Auto;
     p.surfaceTension = r.nonNegative("surface_tension", p.surfaceTension);
     p.spacing = r.nonNegative("spacing", p.spacing);
     for (const TableReader& block : r.tables("block"))
@@ -138,6 +142,10 @@ SolverParams parseSolver(const SceneDocument& doc)
     p.artificialViscosity = r.number("artificial_viscosity", p.artificialViscosity);
     if (!(p.artificialViscosity >= 0 && p.artificialViscosity <= 1))
         r.fail("artificial_viscosity", "must be in [0, 1] (got " + formatNumber(p.artificialViscosity) + ")");
+    p.viscosityTolerance = r.number("viscosity_tolerance", p.viscosityTolerance);
+    if (!(p.viscosityTolerance > 0 && p.viscosityTolerance < 1))
+        r.fail("viscosity_tolerance", "must be in (0, 1) (got " + formatNumber(p.viscosityTolerance) + ")");
+    p.viscosityMaxIterations = r.integerInRange("viscosity_max_iterations", p.viscosityMaxIterations, 1, INT_MAX);
     p.threads = r.integerInRange("threads", p.threads, 0, INT_MAX);
     r.finish();
     return p;

@@ -35,6 +35,9 @@ public:
         std::vector<Vec3>& v = sim_.solverVelocities();
         const std::vector<Vec3>& a = sim_.accelerations();
         forEachParticle(sim_.size(), [&](size_t i) { v[i] += Real(dt) * a[i]; });
+        // Implicit viscosity (when chosen) is a non-pressure force too: solved here, before
+        // the density solve, as in SPlisHSPlasH's DFSPH.
+        sim_.applyImplicitViscosity(dt);
         solveDensity(dt);
     }
 

@@ -99,6 +99,7 @@ FluidSimulation::FluidSimulation(const SimScene& scene)
     sampleBoundary();
     chooseSpeedScales();
     setUpSurfaceTension();
+    chooseViscosityMethod();
 
     if (!scene_.magnets.empty()) magnetics_ = std::make_unique<FluidMagnetics>(scene_, volume_, spacing_);
 
@@ -192,6 +193,56 @@ void FluidSimulation::chooseSpeedScales() {
     for (const Vec3& v : v_) vExpected = std::max(vExpected, double(v.norm()));
     soundSpeed_ = scene_.solver.soundSpeed > 0 ? scene_.solver.soundSpeed : 10 * std::max(vExpected, 0.1);
     viscosity_ = scene_.fluid.viscosity + scene_.solver.artificialViscosity * h_ * std::max(vExpected, 0.01);
+    expectedSpeed_ = vExpected;
+}
+
+double FluidSimulation::explicitViscousTimeStep() const {
+    return viscosity_ > 0 ? kExplicitViscousStep * h_ * h_ / viscosity_ : 1e30;
+}
+
+void FluidSimulation::chooseViscosityMethod() {
+    // Decided once, from the scene alone (the initial fill's speed scale), so that a resumed
+    // run takes the same path. Auto: the step the scene takes without viscosity, at the
+    // expected flow speed, against the explicit viscous limit.
+    using Method = FluidParams::ViscosityMethod;
+    bool implicit = scene_.fluid.viscosityMethod == Method::Implicit;
+    if (scene_.fluid.viscosityMethod == Method::Auto) {
+        const double otherStep =
+            std::min({scene_.solver.maxDt, solver_->maxTimeStep(expectedSpeed_), capillaryDt_});
+        implicit = explicitViscousTimeStep() < otherStep;
+    }
+    if (implicit && viscosity_ > 0) {
+        ImplicitViscositySettings settings;
+        settings.tolerance = scene_.solver.viscosityTolerance;
+        settings.maxIterations = scene_.solver.viscosityMaxIterations;
+        implicitViscosity_ = std::make_unique<ImplicitViscosity>(settings);
+    }
+}
+
+ViscosityOperatorInput FluidSimulation::viscosityOperator() const {
+    ViscosityOperatorInput in;
+    in.positions = &x_;
+    in.densities = &rho_;
+    in.fluidNeighbors = &fluidNbr_;
+    in.boundaryNeighbors = &boundaryNbr_;
+    in.boundaryPositions = &bx_;
+    in.boundaryVolumes = &bVolume_;
+    in.kernel = kernel_;
+    in.supportRadius = h_;
+    in.particleMass = mass_;
+    in.restDensity = rho0_;
+    in.viscosity = viscosity_;
+    // As in the explicit sweep: the walls' friction scales the physical viscosity only.
+    in.wallViscosity = scene_.fluid.viscosity * scene_.container.wallFriction;
+    return in;
+}
+
+void FluidSimulation::applyImplicitViscosity(double dt) {
+    if (!implicitViscosity_) return;
+    implicitViscosity_->setUp(viscosityOperator(), dt);
+    const ImplicitViscosityResult result = implicitViscosity_->solve(v_);
+    stats_.viscosityIterations = result.iterations;
+    stats_.viscosityResidual = result.relativeResidual;
 }
 
 void FluidSimulation::setUpSurfaceTension() {
@@ -238,6 +289,7 @@ void FluidSimulation::searchCandidates() {
     permute(v_, order_);
     permute(id_, order_);
     solver_->permute(order_);
+    if (implicitViscosity_) implicitViscosity_->permute(order_);
     permute(p_, order_);
     if (magnetics_) magnetics_->permute(order_);
     grid_.index(x_, grid_.geometry());
@@ -408,7 +460,7 @@ double FluidSimulation::chooseTimeStep(double dtLimit) const {
     dt = std::min(dt, solver_->maxTimeStep(speed));
     dt = std::min(dt, capillaryDt_);
     if (amax > 0) dt = std::min(dt, 0.25 * std::sqrt(h_ / amax));
-    if (viscosity_ > 0) dt = std::min(dt, 0.125 * h_ * h_ / viscosity_);
+    if (!implicitViscosity_) dt = std::min(dt, explicitViscousTimeStep());
     if (dt < sp.minDt) {
         std::ostringstream msg;
         msg << "time step " << dt << " s fell below sim.min_dt = " << sp.minDt << " s at t = " << time_
@@ -526,8 +578,10 @@ void FluidSimulation::computeAccelerations(const Real* pOverRho2) {
     const Real V = Real(volume_);
     const Real rho0 = Real(rho0_);
     const Real m = Real(mass_);
-    const Real nu = Real(viscosity_);
-    const Real nuWall = Real(scene_.fluid.viscosity * scene_.container.wallFriction);
+    // With implicit viscosity the solve after this sweep adds it (applyImplicitViscosity).
+    const bool explicitViscosity = !implicitViscosity_;
+    const Real nu = explicitViscosity ? Real(viscosity_) : 0;
+    const Real nuWall = explicitViscosity ? Real(scene_.fluid.viscosity * scene_.container.wallFriction) : 0;
     const Real eps2 = Real(0.01 * h_ * h_);
     const bool tension = gamma_ > 0;
     const bool pressure = pOverRho2 != nullptr;
@@ -704,6 +758,7 @@ void FluidSimulation::advanceTo(double tEnd) {
     // file (positions, velocities, pressures) continues exactly like an uninterrupted one.
     // DFSPH's divergence solve converges in a few iterations from zero.
     solver_->resetWarmStart();
+    if (implicitViscosity_) implicitViscosity_->resetWarmStart();
     // A frame starts from a fresh search too: the particle order and the neighbour slots
     // are then a function of the frame's state alone, as in a run resumed from its file.
     if (searchStep_ != steps_) refreshNeighbors(true);
@@ -753,6 +808,7 @@ void FluidSimulation::setState(double time, const std::vector<Vec3>& xById, cons
     else p_ = pById;
     time_ = time;
     solver_->resetWarmStart();
+    if (implicitViscosity_) implicitViscosity_->resetWarmStart();
     if (magnetics_ && HById.size() == x_.size() && MById.size() == x_.size())
         magnetics_->setState(HById, MById);   // id order = current order until the sort below
     refreshNeighbors(true);

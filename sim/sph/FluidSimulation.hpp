@@ -12,6 +12,7 @@
 #include "sim/sph/Container.hpp"
 #include "sim/sph/FluidSeed.hpp"
 #include "sim/sph/FluidMagnetics.hpp"
+#include "sim/sph/ImplicitViscosity.hpp"
 #include "sim/sph/Kernel.hpp"
 #include "sim/sph/NeighborSearch.hpp"
 #include "sim/sph/PressureSolver.hpp"
@@ -38,6 +39,8 @@ struct StepStats {
     size_t neighborPairs = 0;    ///< fluid-fluid pairs closer than the kernel support
     size_t candidatePairs = 0;   ///< fluid-fluid pairs of the last search (support plus skin)
     size_t searches = 0;         ///< neighbour searches so far
+    int viscosityIterations = 0; ///< implicit viscosity: CG iterations of the step (0 when explicit)
+    double viscosityResidual = 0;///< implicit viscosity: relative residual the solve ended at
 };
 
 class FluidSimulation {
@@ -57,6 +60,21 @@ public:
     size_t stepCount() const { return steps_; }
     double soundSpeed() const { return soundSpeed_; }  ///< expected flow speed x 10 (WCSPH) [m/s]
     double particleVolume() const { return volume_; }   ///< V = m / rho0 [m^3]
+    /// The kinematic viscosity the fluid pairs use: fluid.viscosity plus the artificial
+    /// viscosity alpha h U [m^2/s].
+    double viscosity() const { return viscosity_; }
+    /// true: viscosity is solved implicitly (fluid.viscosity_method, "auto" resolved).
+    bool implicitViscosity() const { return implicitViscosity_ != nullptr; }
+    /// The explicit update's viscous step limit kExplicitViscousStep h^2 / nu [s] (1e30
+    /// without viscosity); it bounds the step only when viscosity is explicit.
+    double explicitViscousTimeStep() const;
+    /// Stable explicit viscous step as a fraction of h^2 / nu (h the support radius). Power
+    /// iteration on the viscous operator of the resting tank of examples/hydrostatic.toml
+    /// (free surface, walls; tests/sim/sph/test_Viscosity.cpp) gives its fastest rate as
+    /// lambda_max = 58 nu / h^2, so forward Euler is stable for dt < 2 / lambda_max =
+    /// 0.0345 h^2 / nu. The former 0.125 lay 3.6 times beyond it (issue 15: 9.9 m/s in two
+    /// frames at nu = 1e-2). 0.02 keeps a margin of 1.7 for disordered fluid.
+    static constexpr double kExplicitViscousStep = 0.02;
     /// The pressure solver's label ("DFSPH", "WCSPH"), for progress lines and benchmarks.
     const char* pressureSolverLabel() const { return solverEntry_->label; }
 
@@ -126,6 +144,13 @@ public:
     /// for u = velocities, the density change pressure accelerations cause for u = a.
     /// Needs stored gradients.
     Real divergence(size_t i, const std::vector<Vec3>& u) const;
+    /// With implicit viscosity, solves (I + dt L) v_new = v for the current velocities
+    /// (Weiler 2018; sim/sph/ImplicitViscosity.hpp) and records the iterations in the
+    /// stats; does nothing when viscosity is explicit (the force sweep has added it).
+    /// Solvers call it after adding the non-pressure accelerations.
+    void applyImplicitViscosity(double dt);
+    /// The viscous operator of the current state (for the implicit solve and for tests).
+    ViscosityOperatorInput viscosityOperator() const;
 
 private:
     // Construction, in order: the solver (it decides the neighbour search), the walls'
@@ -135,6 +160,9 @@ private:
     void sampleBoundary();
     void chooseSpeedScales();
     void setUpSurfaceTension();
+    /// fluid.viscosity_method: "auto" takes the implicit solve when the explicit viscous
+    /// limit would be shorter than the step the scene takes otherwise.
+    void chooseViscosityMethod();
     /// Brings the neighbour lists and densities up to date with the positions: a new
     /// search (particle sort, candidates within support plus skin) when `forceSearch` or
     /// when the skin may be used up, then this step's neighbours among the candidates.
@@ -160,6 +188,8 @@ private:
     double spacing_ = 0, h_ = 0, mass_ = 0, volume_ = 0, rho0_ = 0;
     double soundSpeed_ = 0, gamma_ = 0, capillaryDt_ = 1e30;
     double viscosity_ = 0;   // physical plus artificial kinematic viscosity [m^2/s]
+    double expectedSpeed_ = 0; // the flow speed scale U of chooseSpeedScales [m/s]
+    std::unique_ptr<ImplicitViscosity> implicitViscosity_; // only with implicit viscosity
     double time_ = 0;
     size_t steps_ = 0;
     StepStats stats_;

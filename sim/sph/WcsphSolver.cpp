@@ -49,6 +49,8 @@ public:
         std::vector<Vec3>& v = sim_.solverVelocities();
         const std::vector<Vec3>& a = sim_.accelerations();
         forEachParticle(n, [&](size_t i) { v[i] += Real(dt) * a[i]; });
+        // Implicit viscosity (when chosen) on the velocities after all other forces.
+        sim_.applyImplicitViscosity(dt);
         StepStats& stats = sim_.solverStats();
         stats.pressureIterations = 0;
         stats.divergenceIterations = 0;
