@@ -25,6 +25,7 @@
 #include <algorithm>
 #include <atomic>
 #include <cmath>
+#include <sstream>
 #include <mutex>
 
 namespace ferro {
@@ -332,6 +333,18 @@ TriangleMesh extractSurface(const std::vector<Vec3>& positions, const SurfacePar
     if (!(spacing > 0)) spacing = estimateSpacing(positions);
     if (!(spacing > 0)) spacing = 1e-3; // zero or one particle: any scale will do
     const double voxel = params.voxelSize > 0 ? params.voxelSize : spacing / 2;
+    // A voxel far below the spacing makes a grid no machine holds (OpenVDB then fails with
+    // "Non-zero scale values required" or runs out of memory); one far above it loses the
+    // surface (an empty or blocky mesh). Both are typos, refused with the sizes named.
+    if (!std::isfinite(voxel) || !(voxel > 0))
+        throw SurfaceError("voxel size " + std::to_string(voxel) + " m: must be a positive number");
+    if (voxel < spacing / kMinVoxelsPerSpacing || voxel > kMaxSpacingsPerVoxel * spacing) {
+        std::ostringstream o;
+        o << "voxel size " << voxel << " m against a particle spacing of " << spacing << " m: must be within "
+          << spacing / kMinVoxelsPerSpacing << " .. " << kMaxSpacingsPerVoxel * spacing
+          << " m (1/" << kMinVoxelsPerSpacing << " to " << kMaxSpacingsPerVoxel << " spacings; default half a spacing)";
+        throw SurfaceError(o.str());
+    }
     SurfaceStats local;
     SurfaceStats& st = stats ? *stats : local;
     st = SurfaceStats{};
@@ -426,6 +439,8 @@ TriangleMesh extractSurface(const std::vector<Vec3>& positions, const SurfacePar
         st.offset = cal.offset;
         st.meshSeconds = seconds(t0);
     }
+    st.particles = positions.size();
+    st.emptyFromParticles = !positions.empty() && mesh.empty();
     if (!vdbPath.empty()) writeLevelSet(vdbPath, mesh, voxel);
     return mesh;
 }

@@ -18,6 +18,12 @@
 
 namespace ferro {
 
+/// The voxel sizes extractSurface accepts: from spacing / kMinVoxelsPerSpacing (finer needs
+/// a grid of (50 x fluid size / spacing)^3 voxels and more) to kMaxSpacingsPerVoxel spacings
+/// (coarser loses the fluid's features, a thin layer altogether).
+constexpr double kMinVoxelsPerSpacing = 50;
+constexpr double kMaxSpacingsPerVoxel = 4;
+
 /// Input the extractor cannot mesh (non-finite positions, a grid too large to index).
 class SurfaceError : public std::runtime_error {
 public:
@@ -29,6 +35,8 @@ struct SurfaceStats {
     double spacing = 0, voxelSize = 0, isoLevel = 0, offset = 0;
     size_t leaves = 0, activeVoxels = 0;
     double kernelSeconds = 0, rasterSeconds = 0, meshSeconds = 0;
+    size_t particles = 0;             ///< particles meshed
+    bool emptyFromParticles = false;  ///< particles were given but the mesh is empty
 };
 
 /// Meshes the fluid described by `positions` [m]. `spacing` > 0 is the particle spacing

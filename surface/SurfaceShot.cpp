@@ -69,6 +69,12 @@ int runSurface(const SurfaceRun& run, const SurfaceParams& params, std::ostream&
                 << (tbb::tick_count::now() - t0).seconds() << " s, voxel " << std::setprecision(3)
                 << st.voxelSize * 1e3 << " mm)\n";
         }
+        if (st.emptyFromParticles) {
+            // Not an error (a frame may hold no fluid), but never silent.
+            std::lock_guard<std::mutex> lock(io);
+            err << "ferro-surface: warning: " << out << ": " << st.particles
+                << " particles gave an empty mesh (check the voxel size and iso level)\n";
+        }
     };
     try {
         if (!run.range) {

@@ -12,6 +12,9 @@
 
 #include <CLI/CLI.hpp>
 
+#include <cmath>
+#include <utility>
+
 #include <iostream>
 
 int main(int argc, char** argv) {
@@ -68,6 +71,10 @@ int main(int argc, char** argv) {
             params.method = method == "anisotropic" ? SurfaceMethod::Anisotropic
                           : method == "isotropic"   ? SurfaceMethod::Isotropic
                                                     : SurfaceMethod::OpenVdb;
+        // CLI11's number checks let NaN through (every comparison with it is false).
+        for (const auto& [name, v] : {std::pair<const char*, double>{"--voxel-size", voxelSize},
+                                      {"--kernel-radius", kernelRadius}, {"--adaptivity", adaptivity}})
+            if (!std::isfinite(v)) throw BadInputError(std::string(name) + ": must be a finite number");
         if (voxelSize > 0) params.voxelSize = voxelSize;
         if (kernelRadius > 0) {
             // Yu-Turk's neighbourhood follows the kernel (r_i = 2h, our default 2.75 / 1.5).

@@ -198,6 +198,16 @@ TEST_CASE("ferro-surface: bad input is a one-line error with exit 2, missing fil
     CHECK(run("'" + (s / "p.ply") + "' --out '" + (s / "m.xyzformat") + "'", s, &err) == 2);
     CHECK(err.find("unknown mesh format 'xyzformat'") != std::string::npos);
     CHECK(run("--no-such-flag", s, &err) == 2);
+    // Voxel sizes: NaN (which CLI11's number checks let through), one a million times finer
+    // than the spacing (OpenVDB's "Non-zero scale values required"), one that would lose the
+    // fluid: one line naming the size, exit 2, no mesh.
+    for (const char* voxel : {"nan", "1e-12", "10"}) {
+        INFO(voxel);
+        CHECK(run("'" + (s / "p.ply") + "' --voxel-size " + voxel + " --out '" + (s / "v.ply") + "'", s, &err) == 2);
+        CHECK(err.find("voxel") != std::string::npos);
+        CHECK(std::count(err.begin(), err.end(), '\n') == 1);
+        CHECK_FALSE(fs::exists(s / "v.ply"));
+    }
     // A range with one missing frame: the run stops there (sim/core/FrameRunner.hpp), the exit
     // code says I/O and the line names the missing file.
     CHECK(run("'" + (s / "r_{:04}.ply") + "' --frames 0:1 --out '" + (s / "rm_{:04}.ply") + "' -q", s, &err) == 4);
