@@ -444,6 +444,14 @@ TriangleMesh readMesh(const std::string& path) {
             for (size_t j = 0; j < i; ++j)
                 if (header.elements[j].name == header.elements[i].name)
                     fail(path, "bad PLY header: element '" + escapeControl(header.elements[i].name) + "' appears twice");
+        // assimp reads a vertex without x (or y, z) as 0 there: a mesh flattened without a word.
+        for (const PlyElement& e : header.elements) {
+            if (e.name != "vertex" || e.count == 0) continue;
+            for (const char* axis : {"x", "y", "z"})
+                if (std::none_of(e.properties.begin(), e.properties.end(),
+                                 [&](const PlyProperty& p) { return p.name == axis && !p.isList; }))
+                    fail(path, std::string("bad PLY header: the vertex element has no '") + axis + "' property");
+        }
         in.clear();
         checkPlyCounts(path, header, in);
         TriangleMesh mesh;

@@ -221,6 +221,19 @@ TEST_CASE("mesh file errors are one-line MeshFileErrors", "[mesh]") {
     writeMesh((dir / "full.ply").string(), m);
     fs::resize_file(dir / "full.ply", fs::file_size(dir / "full.ply") - 7);
     CHECK_THROWS_AS(readMesh((dir / "full.ply").string()), MeshFileError);
+    // A vertex element without x (assimp read it as x = 0: a flattened mesh): refused, named.
+    {
+        std::ofstream((dir / "nox.ply").string())
+            << "ply\nformat ascii 1.0\nelement vertex 3\nproperty float y\nproperty float z\nproperty float w\n"
+               "element face 1\nproperty list uchar int vertex_indices\nend_header\n0 0 0\n1 0 0\n0 1 0\n3 0 1 2\n";
+    }
+    try {
+        readMesh((dir / "nox.ply").string());
+        FAIL("a mesh without x was read");
+    } catch (const MeshFileError& e) {
+        CHECK(std::string(e.what()).find("no 'x' property") != std::string::npos);
+        CHECK(e.code() == kExitBadInput);
+    }
     fs::remove_all(dir);
 }
 
