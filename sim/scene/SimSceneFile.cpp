@@ -137,6 +137,7 @@ SolverParams parseSolver(const SceneDocument& doc)
     if (!(p.artificialViscosity >= 0 && p.artificialViscosity <= 1))
         r.fail("artificial_viscosity", "must be in [0, 1] (got " + formatNumber(p.artificialViscosity) + ")");
     p.threads = r.integerInRange("threads", p.threads, 0, INT_MAX);
+    p.maxSpeed = r.nonNegative("max_speed", p.maxSpeed);
     r.finish();
     return p;
 }
