@@ -4,7 +4,11 @@
 
 #include <algorithm>
 #include <cmath>
+#include <fstream>
 #include <sstream>
+#include <string>
+
+#include <unistd.h>
 
 namespace ferro {
 
@@ -51,9 +55,86 @@ double blockVolume(const FluidBlock& b) {
     return kPi * b.radius * b.radius * b.height;
 }
 
+std::string formatBytes(double b) {
+    std::ostringstream o;
+    o.precision(3);
+    if (b >= 1e12) o << b / 1e12 << " TB";
+    else if (b >= 1e9) o << b / 1e9 << " GB";
+    else o << b / 1e6 << " MB";
+    return o.str();
+}
+
 } // namespace
 
+double availableMemoryBytes() {
+    // MemAvailable: what can be allocated without swapping (free plus reclaimable cache).
+    std::ifstream in("/proc/meminfo");
+    std::string key;
+    double kb = 0;
+    while (in >> key >> kb) {
+        if (key == "MemAvailable:") return kb * 1024.0;
+        in.ignore(1 << 10, '\n');
+    }
+    const long pages = sysconf(_SC_AVPHYS_PAGES), size = sysconf(_SC_PAGESIZE);
+    return pages > 0 && size > 0 ? double(pages) * double(size) : 0.0;
+}
+
+RunSize estimateRunSize(const SimScene& scene) {
+    RunSize size;
+    const auto& blocks = scene.fluid.blocks;
+    double s = scene.fluid.spacing;
+    if (!(s > 0))
+        for (size_t bi = 0; bi < blocks.size(); ++bi)
+            if (blocks[bi].count > 0) {
+                s = std::cbrt(blockVolume(blocks[bi]) / double(blocks[bi].count));
+                size.key = "fluid.block[" + std::to_string(bi) + "].count";
+                break;
+            }
+    if (!(s > 0)) return size;
+    if (size.key.empty()) size.key = "fluid.spacing";
+    size.spacing = s;
+    for (const FluidBlock& b : blocks) size.fluidParticles += b.count > 0 ? double(b.count) : blockVolume(b) / (s * s * s);
+    // Walls sampled at the spacing: their area over s^2 (a mesh's safety box stands in for
+    // its area, an overestimate of about the right size).
+    const ContainerParams& c = scene.container;
+    double area = 0;
+    switch (c.type) {
+    case ContainerParams::Type::None: break;
+    case ContainerParams::Type::Dish: area = kPi * c.radius * c.radius + 2 * kPi * c.radius * c.height; break;
+    case ContainerParams::Type::Box: {
+        const Vec3d e = c.max - c.min;
+        area = 2 * (e.x() * e.y() + e.y() * e.z() + e.z() * e.x());
+        break;
+    }
+    case ContainerParams::Type::Mesh:
+        if (c.hasBounds) {
+            const Vec3d e = c.boundsMax - c.boundsMin;
+            area = 2 * (e.x() * e.y() + e.y() * e.z() + e.z() * e.x());
+        }
+        break;
+    }
+    size.boundaryParticles = area / (s * s);
+    size.bytes = size.fluidParticles * RunSize::kBytesPerFluidParticle +
+                 size.boundaryParticles * RunSize::kBytesPerBoundaryParticle;
+    return size;
+}
+
+void checkRunSize(const SimScene& scene) {
+    const RunSize size = estimateRunSize(scene);
+    const double available = availableMemoryBytes();
+    if (!(size.bytes > 0) || !(available > 0) || size.bytes <= available) return;
+    std::ostringstream msg;
+    msg.precision(3);
+    msg << scene.path << ": " << size.key << ": the run needs about " << formatBytes(size.bytes) << " ("
+        << size.fluidParticles << " fluid and " << size.boundaryParticles << " boundary particles at spacing "
+        << size.spacing << " m), more than the " << formatBytes(available) << " this machine has available";
+    throw SceneError(msg.str());
+}
+
 FluidSeed seedFluid(const SimScene& scene, const Container& container) {
+    // Before anything is allocated: a typo in a count or spacing must not run for a minute
+    // and end in std::bad_alloc.
+    checkRunSize(scene);
     FluidSeed seed;
     const auto& blocks = scene.fluid.blocks;
     seed.spacing = scene.fluid.spacing;
