@@ -1,4 +1,5 @@
 #include "sim/sph/FluidSeed.hpp"
+#include "sim/sph/MagnetObstacles.hpp"
 
 #include "sim/core/SceneDocument.hpp"
 
@@ -139,6 +140,26 @@ FluidSeed seedFluid(const SimScene& scene, const Container& container) {
     const auto& blocks = scene.fluid.blocks;
     seed.spacing = scene.fluid.spacing;
     std::vector<Vec3d> pts;
+    // A magnet is a solid (MagnetObstacles.hpp): a block is filled around the magnets'
+    // bodies at the start, each point at least half a spacing off a body, as the step's
+    // constraint keeps it; the count is the fluid's (a magnet placed in a dish of a given
+    // amount of fluid raises its level), so the spacing is found around the bodies too.
+    size_t displaced = 0;
+    auto fill = [&](const FluidBlock& b, double spacing) {
+        latticeOfBlock(b, spacing, pts);
+        if (scene.magnets.empty()) return;
+        const std::vector<MagnetObstacle> bodies = magnetObstacles(scene.magnets, 0.0, 0.0, 0.5 * spacing, 0.0);
+        if (bodies.empty()) return;
+        const size_t before = pts.size();
+        pts.erase(std::remove_if(pts.begin(), pts.end(),
+                                 [&](const Vec3d& p) {
+                                     for (const MagnetObstacle& o : bodies)
+                                         if (isInside(o, p)) return true;
+                                     return false;
+                                 }),
+                  pts.end());
+        displaced = before - pts.size();
+    };
     if (seed.spacing <= 0) {
         // Derive the spacing from the first block with a count: the largest spacing
         // whose lattice still holds that many particles (found by bisection).
@@ -150,7 +171,7 @@ FluidSeed seedFluid(const SimScene& scene, const Container& container) {
         double lo = 0.5 * guess, hi = 1.5 * guess;
         for (int it = 0; it < 60; ++it) {
             const double mid = 0.5 * (lo + hi);
-            latticeOfBlock(*first, mid, pts);
+            fill(*first, mid);
             (long(pts.size()) >= first->count ? lo : hi) = mid;
         }
         seed.spacing = lo;
@@ -159,7 +180,7 @@ FluidSeed seedFluid(const SimScene& scene, const Container& container) {
     for (size_t bi = 0; bi < blocks.size(); ++bi) {
         const FluidBlock& b = blocks[bi];
         const std::string key = "fluid.block[" + std::to_string(bi) + "]";
-        latticeOfBlock(b, s, pts);
+        fill(b, s);
         if (b.count > 0) {
             if (long(pts.size()) < b.count)
                 throw SceneError(b.where + ": " + key + ".count: the block holds only " +
@@ -170,7 +191,9 @@ FluidSeed seedFluid(const SimScene& scene, const Container& container) {
             pts.resize(size_t(b.count));
         }
         if (pts.empty())
-            throw SceneError(b.where + ": " + key + ": block is smaller than one particle spacing");
+            throw SceneError(b.where + ": " + key +
+                             (displaced > 0 ? ": the block lies inside a magnet's body (magnets are solid)"
+                                            : ": block is smaller than one particle spacing"));
         for (const Vec3d& p : pts) {
             if (!container.contains(p, 0.25 * s))
                 throw SceneError(b.where + ": " + key + ": fluid outside the container (particle at " +

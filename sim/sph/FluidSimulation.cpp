@@ -675,6 +675,11 @@ void FluidSimulation::integratePositions(double dt) {
     xOld_ = x_;
     std::atomic<size_t> bad{size_t(-1)};
     const Real rdt = Real(dt);
+    // The magnets' bodies at the step's end (MagnetObstacles.hpp): solids the fluid keeps
+    // half a spacing off; none without magnets.
+    const std::vector<MagnetObstacle> bodies =
+        scene_.magnets.empty() ? std::vector<MagnetObstacle>{}
+                               : magnetObstacles(scene_.magnets, time_ + dt, dt, 0.5 * spacing_, magnetSpeed_);
     forEachParticle(n, [&](size_t i) {
         x_[i] += rdt * v_[i];
         // Checked before the container sees it: constrain() would park a NaN particle at
@@ -683,6 +688,9 @@ void FluidSimulation::integratePositions(double dt) {
             size_t expected = size_t(-1);
             bad.compare_exchange_strong(expected, i);
         }
+        // Bodies first: the container's constraint is the last word (a body reaching
+        // through a wall must not push fluid out of the vessel).
+        for (const MagnetObstacle& body : bodies) keepOutside(body, x_[i], v_[i]);
         container_->constrain(xOld_[i], x_[i], v_[i]);
         // The split copy the vectorized neighbour loops gather from.
         px_[i] = x_[i].x();
@@ -808,6 +816,7 @@ void FluidSimulation::setUpSanityGuard() {
             }
         }
     speedBound_.magnets2 = 4 * u * u;
+    magnetSpeed_ = u;
     speedBound_.capillary2 = std::max(0.0, scene_.fluid.surfaceTension) / (rho0_ * spacing_);
 }
 

@@ -13,6 +13,7 @@
 #include "sim/sph/FluidSeed.hpp"
 #include "sim/sph/FluidMagnetics.hpp"
 #include "sim/sph/Kernel.hpp"
+#include "sim/sph/MagnetObstacles.hpp"
 #include "sim/sph/NeighborSearch.hpp"
 #include "sim/sph/PressureSolver.hpp"
 #include "sim/sph/SanityGuard.hpp"
@@ -182,6 +183,7 @@ private:
     SpeedBound speedBound_;
     double maxSpeedRatio_ = 0;
     size_t stuckSteps_ = 0;     // steps in a row with dt near sim.min_dt
+    double magnetSpeed_ = 0;    // the magnets' fastest motion between keys [m/s] (their bodies push at most this fast)
 
     // Fluid particles, sorted by (cell, id).
     std::vector<Vec3> x_, v_, a_, xOld_;
