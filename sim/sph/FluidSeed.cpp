@@ -1,5 +1,6 @@
 #include "sim/sph/FluidSeed.hpp"
 #include "sim/sph/MagnetObstacles.hpp"
+#include "sim/magnetics/MagnetKinds.hpp"
 
 #include "sim/core/SceneDocument.hpp"
 
@@ -181,6 +182,27 @@ FluidSeed seedFluid(const SimScene& scene, const Container& container) {
         const FluidBlock& b = blocks[bi];
         const std::string key = "fluid.block[" + std::to_string(bi) + "]";
         fill(b, s);
+        if (displaced > 0 && (pts.empty() || (b.count > 0 && long(pts.size()) < b.count))) {
+            // The magnets' bodies took the fluid's place: name the one that took most.
+            latticeOfBlock(b, s, pts);
+            const std::vector<MagnetObstacle> bodies = magnetObstacles(scene.magnets, 0.0, 0.0, 0.5 * s, 0.0);
+            size_t worst = 0, most = 0, k = 0;
+            for (size_t m = 0; m < scene.magnets.size(); ++m) {
+                const Magnet mag = scene.magnets[m].at(0.0);
+                if (mag.kind == MagnetKind::Uniform || !(magnetBodyRadius(mag.kind, mag.strength) > 0)) continue;
+                const size_t in = size_t(std::count_if(pts.begin(), pts.end(), [&](const Vec3d& p) { return isInside(bodies[k], p); }));
+                if (in > most) { most = in; worst = m; }
+                ++k;
+            }
+            const Magnet mag = scene.magnets[worst].at(0.0);
+            std::ostringstream msg;
+            msg.precision(3);
+            msg << b.where << ": magnets[" << worst << "]: the magnet's body (" << magnetKindInfo(mag.kind).name
+                << ", the smallest NdFeB body that carries it: radius " << magnetBodyRadius(mag.kind, mag.strength)
+                << " m) fills " << most << " of " << pts.size() << " lattice points of " << key
+                << ": magnets are solid, the block cannot hold its fluid; move the magnet out of the fluid or weaken it";
+            throw SceneError(msg.str());
+        }
         if (b.count > 0) {
             if (long(pts.size()) < b.count)
                 throw SceneError(b.where + ": " + key + ".count: the block holds only " +
@@ -191,9 +213,7 @@ FluidSeed seedFluid(const SimScene& scene, const Container& container) {
             pts.resize(size_t(b.count));
         }
         if (pts.empty())
-            throw SceneError(b.where + ": " + key +
-                             (displaced > 0 ? ": the block lies inside a magnet's body (magnets are solid)"
-                                            : ": block is smaller than one particle spacing"));
+            throw SceneError(b.where + ": " + key + ": block is smaller than one particle spacing");
         for (const Vec3d& p : pts) {
             if (!container.contains(p, 0.25 * s))
                 throw SceneError(b.where + ": " + key + ": fluid outside the container (particle at " +

@@ -46,6 +46,7 @@ susceptibility = 1.5
 saturation = 35000.0
 )";
 constexpr double kDishRadius = 0.01;
+constexpr double kDishHeight = 0.01;
 
 enum class Expect {
     Stable,      ///< must run to the end stably
@@ -71,7 +72,8 @@ std::string outFrame(const std::string& dir, int f) {
 /// Checks one written frame: finite, inside the dish, compressed by less than 2 % on
 /// average (mean of max(rho / rho0 - 1, 0): free-surface particles have a density deficit
 /// that says nothing about the volume, so only compression counts).
-void checkFrame(const std::string& path, size_t particles) {
+/// Returns the particles above the dish's rim (printed, not asserted: the fluid may splash).
+size_t checkFrame(const std::string& path, size_t particles) {
     const ParticleTable t = readParticleFile(path);
     CAPTURE(path);
     REQUIRE(t.rows() == particles);
@@ -82,9 +84,10 @@ void checkFrame(const std::string& path, size_t particles) {
     const double spacing = t.commentNumber("spacing", 0);
     const auto x = t.vec3("x", "y", "z");
     const int rho = t.column("density");
-    size_t outside = 0;
+    size_t outside = 0, aboveRim = 0;
     double compression = 0;
     for (size_t i = 0; i < t.rows(); ++i) {
+        aboveRim += x[i].z() > kDishHeight;
         const double r = std::hypot(double(x[i].x()), double(x[i].y()));
         outside += r > kDishRadius + 0.01 * spacing || x[i].z() < -0.01 * spacing;
         compression += std::max(0.0, double(t.at(i, rho)) / rho0 - 1);
@@ -92,6 +95,7 @@ void checkFrame(const std::string& path, size_t particles) {
     REQUIRE(outside == 0);
     CAPTURE(compression / double(t.rows()));
     REQUIRE(compression / double(t.rows()) < 0.02);
+    return aboveRim;
 }
 
 void runRow(const Row& row, size_t particles = 500) {
@@ -121,7 +125,10 @@ void runRow(const Row& row, size_t particles = 500) {
         REQUIRE(lines(last) == 1);
         REQUIRE(written >= 1);
     }
-    for (int f = 0; f < written; ++f) checkFrame(outFrame(out, f), particles);
+    size_t aboveRim = 0;
+    for (int f = 0; f < written; ++f) aboveRim = std::max(aboveRim, checkFrame(outFrame(out, f), particles));
+    std::printf("extremes  %-34s particles above the rim: at most %zu in a frame\n", row.name.c_str(), aboveRim);
+    std::fflush(stdout);
 }
 
 std::string dipole(double z, double moment, const std::string& extra = "") {
@@ -167,7 +174,10 @@ TEST_CASE("extremes: applied field from 0 to far beyond saturation, switched off
 TEST_CASE("extremes: magnets touching the dish and inside the fluid (issue 15)", "[extremes]") {
     // A magnet inside the fluid used to throw most particles above the rim at 5-15 m/s
     // with exit 0: its field, softened over one spacing only, reached 100 T. Sources are
-    // now bounded by the smallest real body that carries them (magnetBodyRadius).
+    // now bounded by the smallest real body that carries them (magnetBodyRadius), and that
+    // body is a solid the fluid is seeded around and kept out of (sim/sph/MagnetObstacles).
+    // Measured (5 frames): all five run to the end, max speed 0.67-1.41 x the energy speed
+    // (the loop used to be stopped by the guard at 18.6 m/s in frame 3).
     const std::vector<Row> rows = {
         {"dipole touching the floor", dipole(0.0, 1.0), "", Expect::StableOrStop},
         {"dipole inside the fluid", dipole(0.002, 1.0), "", Expect::StableOrStop},
