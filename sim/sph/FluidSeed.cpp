@@ -145,7 +145,8 @@ FluidSeed seedFluid(const SimScene& scene, const Container& container) {
     // bodies at the start, each point at least half a spacing off a body, as the step's
     // constraint keeps it; the count is the fluid's (a magnet placed in a dish of a given
     // amount of fluid raises its level), so the spacing is found around the bodies too.
-    size_t displaced = 0;
+    size_t displaced = 0;      // lattice points the bodies took in the last fill
+    bool displacedAny = false; // ... in any fill (the bisection's too)
     auto fill = [&](const FluidBlock& b, double spacing) {
         latticeOfBlock(b, spacing, pts);
         if (scene.magnets.empty()) return;
@@ -160,6 +161,7 @@ FluidSeed seedFluid(const SimScene& scene, const Container& container) {
                                  }),
                   pts.end());
         displaced = before - pts.size();
+        displacedAny = displacedAny || displaced > 0;
     };
     if (seed.spacing <= 0) {
         // Derive the spacing from the first block with a count: the largest spacing
@@ -182,14 +184,15 @@ FluidSeed seedFluid(const SimScene& scene, const Container& container) {
         const FluidBlock& b = blocks[bi];
         const std::string key = "fluid.block[" + std::to_string(bi) + "]";
         fill(b, s);
-        if (displaced > 0 && (pts.empty() || (b.count > 0 && long(pts.size()) < b.count))) {
+        if (displacedAny && (pts.empty() || (b.count > 0 && long(pts.size()) < b.count))) {
             // The magnets' bodies took the fluid's place: name the one that took most.
             latticeOfBlock(b, s, pts);
             const std::vector<MagnetObstacle> bodies = magnetObstacles(scene.magnets, 0.0, 0.0, 0.5 * s, 0.0);
-            size_t worst = 0, most = 0, k = 0;
+            size_t worst = size_t(-1), most = 0, k = 0;
             for (size_t m = 0; m < scene.magnets.size(); ++m) {
                 const Magnet mag = scene.magnets[m].at(0.0);
                 if (mag.kind == MagnetKind::Uniform || !(magnetBodyRadius(mag.kind, mag.strength) > 0)) continue;
+                if (worst == size_t(-1)) worst = m;
                 const size_t in = size_t(std::count_if(pts.begin(), pts.end(), [&](const Vec3d& p) { return isInside(bodies[k], p); }));
                 if (in > most) { most = in; worst = m; }
                 ++k;
@@ -199,8 +202,10 @@ FluidSeed seedFluid(const SimScene& scene, const Container& container) {
             msg.precision(3);
             msg << b.where << ": magnets[" << worst << "]: the magnet's body (" << magnetKindInfo(mag.kind).name
                 << ", the smallest NdFeB body that carries it: radius " << magnetBodyRadius(mag.kind, mag.strength)
-                << " m) fills " << most << " of " << pts.size() << " lattice points of " << key
-                << ": magnets are solid, the block cannot hold its fluid; move the magnet out of the fluid or weaken it";
+                << " m) takes the place of " << key << "'s fluid";
+            if (most > 0) msg << " (" << most << " of its " << pts.size() << " lattice points)";
+            msg << (b.count > 0 ? ": the rest cannot hold its count" : "")
+                << "; magnets are solid: move the magnet out of the fluid or weaken it";
             throw SceneError(msg.str());
         }
         if (b.count > 0) {
