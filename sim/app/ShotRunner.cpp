@@ -210,7 +210,10 @@ void runShot(const SimScene& scene, const RunOptions& opt) {
     }
     if (!opt.quiet) {
         const double wall = std::chrono::duration<double>(Clock::now() - start).count();
-        std::fprintf(stderr, "ferro-sim: done, %zu steps in %.1f s wall\n", sim.stepCount() - startSteps, wall);
+        // The sanity guard's margin: the fastest particle over the speed all of the scene's
+        // energy would give one particle (the guard stops at SanityLimits::kSpeedSafety).
+        std::fprintf(stderr, "ferro-sim: done, %zu steps in %.1f s wall, max speed %.2f x the scene's energy speed %.3g m/s\n",
+                     sim.stepCount() - startSteps, wall, sim.maxSpeedRatio(), sim.speedBound().energySpeed());
     }
 }
 

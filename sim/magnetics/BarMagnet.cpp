@@ -17,38 +17,55 @@ namespace {
 
 constexpr double kInv4Pi = 1.0 / (4.0 * kPi);
 
-// Field of a unit point charge, r / (r^2 + eps^2)^(3/2) (no 1/4pi); zero at the exact
-// singular point when eps = 0.
-Vec3d chargeField(const Vec3d& r, double eps2) {
-    const double s2 = r.squaredNorm() + eps2;
-    if (!(s2 > 0.0)) return Vec3d::Zero();
-    const double s = std::sqrt(s2);
-    return r / (s2 * s);
+// The unit pole charge's potential is chi(t) / (4 pi), chi = (t^4 + a^8)^(-1/8) of
+// t = r^2 + eps^2: the Plummer-softened 1/r without a body (a = 0), bounded within the
+// radius a of the smallest pole face that carries the charge (magnetBodyRadius), exact to
+// (1 + (a/r)^8)^(-1/8) outside it (see DipoleMagnet.cpp for the dipole's). Scaled by
+// S = (t^4 + a^8)^(1/4), w = t / S: chi' = -1/2 w^3 S^-3/2, chi'' = -1/2 (3 w^2 - 9/2 w^6) S^-5/2.
+struct ChargeProfile {
+    double d1 = 0, d2 = 0;
+    ChargeProfile(double t, double a) {
+        const double a2 = a * a, c = std::max(t, a2);
+        if (!(c > 0.0)) return;
+        const double u = t / c, v = a2 / c;
+        const double S = c * std::sqrt(std::sqrt(u * u * u * u + v * v * v * v));
+        const double w = t / S, w2 = w * w;
+        const double rs = 1.0 / std::sqrt(S);
+        const double s32 = rs * rs * rs;        // S^-3/2
+        d1 = -0.5 * w2 * w * s32;
+        d2 = -0.5 * (3.0 * w2 - 4.5 * w2 * w2 * w2) * s32 / S;
+    }
+};
+
+// Field of a unit point charge, -2 chi' r (no 1/4pi): r / (r^2 + eps^2)^(3/2) without a body;
+// zero at the exact singular point when eps = a = 0.
+Vec3d chargeField(const Vec3d& r, double eps2, double a) {
+    const ChargeProfile f(r.squaredNorm() + eps2, a);
+    return (-2.0 * f.d1) * r;
 }
 
-// Jacobian of chargeField: delta_ij / s^3 - 3 r_i r_j / s^5.
-Mat3d chargeGradient(const Vec3d& r, double eps2) {
-    const double s2 = r.squaredNorm() + eps2;
-    if (!(s2 > 0.0)) return Mat3d::Zero();
-    const double s = std::sqrt(s2);
-    const double inv3 = 1.0 / (s2 * s);
-    return inv3 * Mat3d::Identity() - (3.0 * inv3 / s2) * (r * r.transpose());
+// Jacobian of chargeField: -(2 chi' I + 4 chi'' r r^T).
+Mat3d chargeGradient(const Vec3d& r, double eps2, double a) {
+    const ChargeProfile f(r.squaredNorm() + eps2, a);
+    return (-2.0 * f.d1) * Mat3d::Identity() - (4.0 * f.d2) * (r * r.transpose());
 }
 
 } // namespace
 
 Vec3d barMagnetField(const Magnet& mag, const Vec3d& n, const Vec3d& x) {
     const double eps2 = mag.softening * mag.softening;
+    const double a = magnetBodyRadius(MagnetKind::Bar, mag.strength);
     const Vec3d half = 0.5 * mag.length * n;
     return (mag.strength * kInv4Pi) *
-           (chargeField(x - (mag.position + half), eps2) - chargeField(x - (mag.position - half), eps2));
+           (chargeField(x - (mag.position + half), eps2, a) - chargeField(x - (mag.position - half), eps2, a));
 }
 
 Mat3d barMagnetGradient(const Magnet& mag, const Vec3d& n, const Vec3d& x) {
     const double eps2 = mag.softening * mag.softening;
+    const double a = magnetBodyRadius(MagnetKind::Bar, mag.strength);
     const Vec3d half = 0.5 * mag.length * n;
     return (mag.strength * kInv4Pi) *
-           (chargeGradient(x - (mag.position + half), eps2) - chargeGradient(x - (mag.position - half), eps2));
+           (chargeGradient(x - (mag.position + half), eps2, a) - chargeGradient(x - (mag.position - half), eps2, a));
 }
 
 } // namespace ferro

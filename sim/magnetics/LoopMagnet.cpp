@@ -129,13 +129,19 @@ void loopFieldCyl(double I, double a, double eps, double rho, double z,
     loopFieldCylExact(I, a, rho, z, alpha2, Hz, HrhoOverRho);
 }
 
+// The clamp radius: the softening, and at least the thinnest wire that carries the current
+// (magnetBodyRadius): the field beside a real wire is bounded by its thickness.
+double loopSoftening(const Magnet& mag) {
+    return std::max({mag.softening, magnetBodyRadius(MagnetKind::Loop, mag.strength), 0.0});
+}
+
 Vec3d loopField(const Magnet& mag, const Vec3d& n, const Vec3d& x) {
     if (!(mag.radius > 0.0)) return Vec3d::Zero();
     const Vec3d d = x - mag.position;
     const double z = d.dot(n);
     const Vec3d radial = d - z * n;
     double Hz, HrhoOverRho;
-    loopFieldCyl(mag.strength, mag.radius, std::max(mag.softening, 0.0), radial.norm(), z, Hz,
+    loopFieldCyl(mag.strength, mag.radius, loopSoftening(mag), radial.norm(), z, Hz,
                  HrhoOverRho);
     return Hz * n + HrhoOverRho * radial;
 }
@@ -167,7 +173,7 @@ Mat3d loopMagnetGradient(const Magnet& mag, const Vec3d& n, const Vec3d& x) {
     const double z = d.dot(n);
     const double rho = (d - z * n).norm();
     const double wire = std::hypot(rho - mag.radius, z);
-    const double eps = std::min(std::max(mag.softening, 0.0), 0.5 * mag.radius);
+    const double eps = std::min(loopSoftening(mag), 0.5 * mag.radius);
     const double scale = std::max(wire, eps);
     if (!(scale > 0.0)) return Mat3d::Zero(); // eps = 0 exactly on the wire
     const double h = 1e-5 * scale;

@@ -25,6 +25,24 @@ enum class MagnetKind {
     Loop     ///< circular current loop of `radius`, axis = direction, centred at `position`
 };
 
+/// The strongest magnetization of any permanent magnet material [A/m]: sintered NdFeB of
+/// the highest grade (N52, remanence ~1.45 T) has M = Br / mu0 ~ 1.15e6 A/m. A point source
+/// stands for a real magnet, which is at least as big as this magnetization allows, so its
+/// field near the source is bounded by that body (see magnetBodyRadius): the field of a
+/// point dipole softened over one particle spacing reaches 100 T beside a 1 A m^2 source
+/// and throws the fluid out of the dish.
+constexpr double kStrongestMagnetization = 1.2e6;
+/// Largest current density of a magnet's winding [A/m^2] (superconducting tape in its
+/// field, pulsed copper); a loop's wire is at least sqrt(I / (pi J)) thick.
+constexpr double kStrongestCurrentDensity = 1e9;
+
+/// The radius [m] of the smallest body that can carry a source of this kind and strength:
+/// dipole, a sphere of magnetization kStrongestMagnetization, (3 |m| / (4 pi M))^(1/3);
+/// bar, a pole face of that magnetization, sqrt(|q| / (pi M)); loop, the wire's radius
+/// sqrt(|I| / (pi J)); 0 for a uniform field. Dipole and bar fields are exact outside about
+/// twice this radius and bounded within it (DipoleMagnet.cpp), the loop is clamped at it.
+double magnetBodyRadius(MagnetKind kind, double strength);
+
 /// The body ferro-pov draws for a magnet.
 enum class MagnetBody {
     None, ///< nothing (a uniform field has no body)

@@ -96,6 +96,10 @@ struct SolverParams {
     double viscosityTolerance = 1e-3;
     int viscosityMaxIterations = 100; ///< implicit viscosity: iteration cap of each solve
     int threads = 0;                  ///< worker threads; 0 = all cores
+    /// Speed [m/s] beyond which the sanity guard stops the run (exit 3); 0 = derived from
+    /// the scene's energy sources (sim/sph/SanityGuard.hpp). For scenes that drive the
+    /// fluid by means the derived bound does not know.
+    double maxSpeed = 0.0;
 };
 
 /// [shot]: timing of the output.

@@ -147,6 +147,7 @@ SolverParams parseSolver(const SceneDocument& doc)
         r.fail("viscosity_tolerance", "must be in (0, 1) (got " + formatNumber(p.viscosityTolerance) + ")");
     p.viscosityMaxIterations = r.integerInRange("viscosity_max_iterations", p.viscosityMaxIterations, 1, INT_MAX);
     p.threads = r.integerInRange("threads", p.threads, 0, INT_MAX);
+    p.maxSpeed = r.nonNegative("max_speed", p.maxSpeed);
     r.finish();
     return p;
 }

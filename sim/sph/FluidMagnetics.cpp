@@ -169,6 +169,7 @@ void FluidMagnetics::solve(const std::vector<Vec3>& x, bool forced) {
     stats_.iterations = st.iterations;
     stats_.estimatedError = st.fieldError;
     stats_.converged = stats_.converged && st.converged;
+    unconvergedInRow_ = st.converged ? 0 : unconvergedInRow_ + 1;
     stats_.residual = std::max(stats_.residual, st.residual);
 }
 
@@ -183,6 +184,16 @@ void FluidMagnetics::update(double t, const std::vector<Vec3>& x, const std::vec
     Hind_.resize(n, Vec3::Zero());
     forEachParticle(n, [&](size_t i) { Hext_[i] = magnetField(magnets_, x[i].cast<double>()).cast<Real>(); });
     ++stats_.steps;
+    auto largest = [&](const std::vector<Vec3>& field) {
+        return std::sqrt(double(tbb::parallel_reduce(
+            tbb::blocked_range<size_t>(0, field.size(), 4096), Real(0),
+            [&](const tbb::blocked_range<size_t>& r, Real m) {
+                for (size_t i = r.begin(); i != r.end(); ++i) m = std::max(m, field[i].squaredNorm());
+                return m;
+            },
+            [](Real a, Real b) { return std::max(a, b); })));
+    };
+    maxFieldSeen_ = std::max(maxFieldSeen_, largest(Hext_));
     if (!magnetic()) {
         H_ = Hext_;
         std::fill(M_.begin(), M_.end(), Vec3::Zero());
@@ -207,6 +218,7 @@ void FluidMagnetics::update(double t, const std::vector<Vec3>& x, const std::vec
         applyLaw();
         ++stepsSinceSolve_;
     }
+    maxFieldSeen_ = std::max(maxFieldSeen_, largest(H_));
     computeKelvin(x, colorGradient, exposure);
     if (solving) {
         // How much the Kelvin force matters beside gravity (see solveIsStale()).

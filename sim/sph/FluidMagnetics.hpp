@@ -109,6 +109,11 @@ public:
     void addKelvinAcceleration(std::vector<Vec3>& a) const;
     /// Largest Kelvin acceleration of the last update [m/s^2] (for the time step).
     double maxAcceleration() const { return maxAcceleration_; }
+    /// Largest |H| [A/m] any particle has felt so far (applied or total field): the
+    /// magnetic energy the sanity guard allows for.
+    double maxFieldSeen() const { return maxFieldSeen_; }
+    /// Self-consistent solves in a row that ended at their iteration cap unconverged.
+    size_t unconvergedInRow() const { return unconvergedInRow_; }
     /// Kelvin accelerations of the last update, current order.
     const std::vector<Vec3>& kelvinAcceleration() const { return kelvin_; }
 
@@ -152,6 +157,8 @@ private:
     std::vector<Vec3> Hext_, Hind_, H_, M_;  // per particle, current order
     std::vector<Vec3> kelvin_;               // Kelvin acceleration per particle [m/s^2]
     double maxAcceleration_ = 0;
+    double maxFieldSeen_ = 0;
+    size_t unconvergedInRow_ = 0;
     double flatGradient_ = 0, layerFactor_ = 1;  // surface model: |grad c| of a flat lattice surface, kappa
     bool traction_ = true;                   // the last solve had the particles' own field
     std::vector<Vec3> HextSolved_;           // applied field at the last solve, current order

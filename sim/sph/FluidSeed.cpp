@@ -1,10 +1,16 @@
 #include "sim/sph/FluidSeed.hpp"
+#include "sim/sph/MagnetObstacles.hpp"
+#include "sim/magnetics/MagnetKinds.hpp"
 
 #include "sim/core/SceneDocument.hpp"
 
 #include <algorithm>
 #include <cmath>
+#include <fstream>
 #include <sstream>
+#include <string>
+
+#include <unistd.h>
 
 namespace ferro {
 
@@ -51,13 +57,112 @@ double blockVolume(const FluidBlock& b) {
     return kPi * b.radius * b.radius * b.height;
 }
 
+std::string formatBytes(double b) {
+    std::ostringstream o;
+    o.precision(3);
+    if (b >= 1e12) o << b / 1e12 << " TB";
+    else if (b >= 1e9) o << b / 1e9 << " GB";
+    else o << b / 1e6 << " MB";
+    return o.str();
+}
+
 } // namespace
 
+double availableMemoryBytes() {
+    // MemAvailable: what can be allocated without swapping (free plus reclaimable cache).
+    std::ifstream in("/proc/meminfo");
+    std::string key;
+    double kb = 0;
+    while (in >> key >> kb) {
+        if (key == "MemAvailable:") return kb * 1024.0;
+        in.ignore(1 << 10, '\n');
+    }
+    const long pages = sysconf(_SC_AVPHYS_PAGES), size = sysconf(_SC_PAGESIZE);
+    return pages > 0 && size > 0 ? double(pages) * double(size) : 0.0;
+}
+
+RunSize estimateRunSize(const SimScene& scene) {
+    RunSize size;
+    const auto& blocks = scene.fluid.blocks;
+    double s = scene.fluid.spacing;
+    if (!(s > 0))
+        for (size_t bi = 0; bi < blocks.size(); ++bi)
+            if (blocks[bi].count > 0) {
+                s = std::cbrt(blockVolume(blocks[bi]) / double(blocks[bi].count));
+                size.key = "fluid.block[" + std::to_string(bi) + "].count";
+                break;
+            }
+    if (!(s > 0)) return size;
+    if (size.key.empty()) size.key = "fluid.spacing";
+    size.spacing = s;
+    for (const FluidBlock& b : blocks) size.fluidParticles += b.count > 0 ? double(b.count) : blockVolume(b) / (s * s * s);
+    // Walls sampled at the spacing: their area over s^2 (a mesh's safety box stands in for
+    // its area, an overestimate of about the right size).
+    const ContainerParams& c = scene.container;
+    double area = 0;
+    switch (c.type) {
+    case ContainerParams::Type::None: break;
+    case ContainerParams::Type::Dish: area = kPi * c.radius * c.radius + 2 * kPi * c.radius * c.height; break;
+    case ContainerParams::Type::Box: {
+        const Vec3d e = c.max - c.min;
+        area = 2 * (e.x() * e.y() + e.y() * e.z() + e.z() * e.x());
+        break;
+    }
+    case ContainerParams::Type::Mesh:
+        if (c.hasBounds) {
+            const Vec3d e = c.boundsMax - c.boundsMin;
+            area = 2 * (e.x() * e.y() + e.y() * e.z() + e.z() * e.x());
+        }
+        break;
+    }
+    size.boundaryParticles = area / (s * s);
+    size.bytes = size.fluidParticles * RunSize::kBytesPerFluidParticle +
+                 size.boundaryParticles * RunSize::kBytesPerBoundaryParticle;
+    return size;
+}
+
+void checkRunSize(const SimScene& scene) {
+    const RunSize size = estimateRunSize(scene);
+    const double available = availableMemoryBytes();
+    if (!(size.bytes > 0) || !(available > 0) || size.bytes <= available) return;
+    std::ostringstream msg;
+    msg.precision(3);
+    msg << scene.path << ": " << size.key << ": the run needs about " << formatBytes(size.bytes) << " ("
+        << size.fluidParticles << " fluid and " << size.boundaryParticles << " boundary particles at spacing "
+        << size.spacing << " m), more than the " << formatBytes(available) << " this machine has available";
+    throw SceneError(msg.str());
+}
+
 FluidSeed seedFluid(const SimScene& scene, const Container& container) {
+    // Before anything is allocated: a typo in a count or spacing must not run for a minute
+    // and end in std::bad_alloc.
+    checkRunSize(scene);
     FluidSeed seed;
     const auto& blocks = scene.fluid.blocks;
     seed.spacing = scene.fluid.spacing;
     std::vector<Vec3d> pts;
+    // A magnet is a solid (MagnetObstacles.hpp): a block is filled around the magnets'
+    // bodies at the start, each point at least half a spacing off a body, as the step's
+    // constraint keeps it; the count is the fluid's (a magnet placed in a dish of a given
+    // amount of fluid raises its level), so the spacing is found around the bodies too.
+    size_t displaced = 0;      // lattice points the bodies took in the last fill
+    bool displacedAny = false; // ... in any fill (the bisection's too)
+    auto fill = [&](const FluidBlock& b, double spacing) {
+        latticeOfBlock(b, spacing, pts);
+        if (scene.magnets.empty()) return;
+        const std::vector<MagnetObstacle> bodies = magnetObstacles(scene.magnets, 0.0, 0.0, 0.5 * spacing, 0.0);
+        if (bodies.empty()) return;
+        const size_t before = pts.size();
+        pts.erase(std::remove_if(pts.begin(), pts.end(),
+                                 [&](const Vec3d& p) {
+                                     for (const MagnetObstacle& o : bodies)
+                                         if (isInside(o, p)) return true;
+                                     return false;
+                                 }),
+                  pts.end());
+        displaced = before - pts.size();
+        displacedAny = displacedAny || displaced > 0;
+    };
     if (seed.spacing <= 0) {
         // Derive the spacing from the first block with a count: the largest spacing
         // whose lattice still holds that many particles (found by bisection).
@@ -69,7 +174,7 @@ FluidSeed seedFluid(const SimScene& scene, const Container& container) {
         double lo = 0.5 * guess, hi = 1.5 * guess;
         for (int it = 0; it < 60; ++it) {
             const double mid = 0.5 * (lo + hi);
-            latticeOfBlock(*first, mid, pts);
+            fill(*first, mid);
             (long(pts.size()) >= first->count ? lo : hi) = mid;
         }
         seed.spacing = lo;
@@ -78,7 +183,31 @@ FluidSeed seedFluid(const SimScene& scene, const Container& container) {
     for (size_t bi = 0; bi < blocks.size(); ++bi) {
         const FluidBlock& b = blocks[bi];
         const std::string key = "fluid.block[" + std::to_string(bi) + "]";
-        latticeOfBlock(b, s, pts);
+        fill(b, s);
+        if (displacedAny && (pts.empty() || (b.count > 0 && long(pts.size()) < b.count))) {
+            // The magnets' bodies took the fluid's place: name the one that took most.
+            latticeOfBlock(b, s, pts);
+            const std::vector<MagnetObstacle> bodies = magnetObstacles(scene.magnets, 0.0, 0.0, 0.5 * s, 0.0);
+            size_t worst = size_t(-1), most = 0, k = 0;
+            for (size_t m = 0; m < scene.magnets.size(); ++m) {
+                const Magnet mag = scene.magnets[m].at(0.0);
+                if (mag.kind == MagnetKind::Uniform || !(magnetBodyRadius(mag.kind, mag.strength) > 0)) continue;
+                if (worst == size_t(-1)) worst = m;
+                const size_t in = size_t(std::count_if(pts.begin(), pts.end(), [&](const Vec3d& p) { return isInside(bodies[k], p); }));
+                if (in > most) { most = in; worst = m; }
+                ++k;
+            }
+            const Magnet mag = scene.magnets[worst].at(0.0);
+            std::ostringstream msg;
+            msg.precision(3);
+            msg << b.where << ": magnets[" << worst << "]: the magnet's body (" << magnetKindInfo(mag.kind).name
+                << ", the smallest NdFeB body that carries it: radius " << magnetBodyRadius(mag.kind, mag.strength)
+                << " m) takes the place of " << key << "'s fluid";
+            if (most > 0) msg << " (" << most << " of its " << pts.size() << " lattice points)";
+            msg << (b.count > 0 ? ": the rest cannot hold its count" : "")
+                << "; magnets are solid: move the magnet out of the fluid or weaken it";
+            throw SceneError(msg.str());
+        }
         if (b.count > 0) {
             if (long(pts.size()) < b.count)
                 throw SceneError(b.where + ": " + key + ".count: the block holds only " +

@@ -5,9 +5,28 @@
 #include "sim/scene/SimParams.hpp"
 #include "sim/sph/Container.hpp"
 
+#include <string>
 #include <vector>
 
 namespace ferro {
+
+/// The memory a run will need, estimated from the scene before anything is allocated.
+struct RunSize {
+    /// Bytes per fluid particle: state, neighbour candidate slots and lists with DFSPH's
+    /// stored gradients, solver and magnetics arrays. Measured: 1,000,000 particles, DFSPH,
+    /// no magnets, peak RSS 1.41 GB (tests/sim/app/test_extremes.cpp); 3 kB leaves room for
+    /// the magnetics arrays and the wider neighbour slots of a compressed fluid.
+    static constexpr double kBytesPerFluidParticle = 3000;
+    /// Bytes per boundary particle: position, volume, split coordinates, sort.
+    static constexpr double kBytesPerBoundaryParticle = 64;
+    double fluidParticles = 0, boundaryParticles = 0, spacing = 0, bytes = 0;
+    std::string key;   ///< the scene key that sets the size ("fluid.spacing" or a block's count)
+};
+RunSize estimateRunSize(const SimScene& scene);
+/// MemAvailable of /proc/meminfo (or sysconf's available pages) [bytes]; 0 if unknown.
+double availableMemoryBytes();
+/// Throws SceneError naming the key when the estimate exceeds the available memory.
+void checkRunSize(const SimScene& scene);
 
 /// Initial fluid particles of a scene (lattice fill of its blocks) and their spacing.
 struct FluidSeed {

@@ -1,7 +1,9 @@
 #include "sim/sph/FluidSimulation.hpp"
 
+#include "sim/core/Constants.hpp"
 #include "sim/core/ParticleLoops.hpp"
 #include "sim/core/SceneDocument.hpp"
+#include "sim/magnetics/MagnetizationSolver.hpp"
 
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
@@ -102,6 +104,7 @@ FluidSimulation::FluidSimulation(const SimScene& scene)
     chooseViscosityMethod();
 
     if (!scene_.magnets.empty()) magnetics_ = std::make_unique<FluidMagnetics>(scene_, volume_, spacing_);
+    setUpSanityGuard();
 
     refreshNeighbors(true);
     // The field of the initial state, so that frame 0 carries H and M too.
@@ -441,7 +444,7 @@ void FluidSimulation::updateNeighbors() {
     stats_.neighborPairs = pairs;
 }
 
-double FluidSimulation::chooseTimeStep(double dtLimit) const {
+double FluidSimulation::maxSpeed(size_t* which) const {
     const size_t n = x_.size();
     const Real vmax = tbb::parallel_reduce(
         tbb::blocked_range<size_t>(0, n, 4096), Real(0),
@@ -450,7 +453,18 @@ double FluidSimulation::chooseTimeStep(double dtLimit) const {
             return m;
         },
         [](Real a, Real b) { return std::max(a, b); });
-    const double speed = std::sqrt(double(vmax));
+    if (which) {
+        *which = 0;
+        for (size_t i = 0; i < n; ++i)
+            if (v_[i].squaredNorm() == vmax) {
+                *which = i;
+                break;
+            }
+    }
+    return std::sqrt(double(vmax));
+}
+
+double FluidSimulation::chooseTimeStep(double dtLimit, double speed) const {
     // Force criterion (Monaghan 1992): dt <= 0.25 sqrt(h / |a|). Gravity alone never binds
     // at SPH spacings; a strong Kelvin force near a magnet pole does. Both are known at the
     // step's start, so the step stays a pure function of the state (exact resume).
@@ -463,6 +477,7 @@ double FluidSimulation::chooseTimeStep(double dtLimit) const {
     if (!implicitViscosity_) dt = std::min(dt, explicitViscousTimeStep());
     if (dt < sp.minDt) {
         std::ostringstream msg;
+        msg.precision(3);
         msg << "time step " << dt << " s fell below sim.min_dt = " << sp.minDt << " s at t = " << time_
             << " s (max speed " << speed << " m/s): the simulation is unstable";
         throw SimulationError(msg.str());
@@ -714,6 +729,11 @@ void FluidSimulation::integratePositions(double dt) {
     xOld_ = x_;
     std::atomic<size_t> bad{size_t(-1)};
     const Real rdt = Real(dt);
+    // The magnets' bodies at the step's end (MagnetObstacles.hpp): solids the fluid keeps
+    // half a spacing off; none without magnets.
+    const std::vector<MagnetObstacle> bodies =
+        scene_.magnets.empty() ? std::vector<MagnetObstacle>{}
+                               : magnetObstacles(scene_.magnets, time_ + dt, dt, 0.5 * spacing_, magnetSpeed_);
     forEachParticle(n, [&](size_t i) {
         x_[i] += rdt * v_[i];
         // Checked before the container sees it: constrain() would park a NaN particle at
@@ -722,6 +742,9 @@ void FluidSimulation::integratePositions(double dt) {
             size_t expected = size_t(-1);
             bad.compare_exchange_strong(expected, i);
         }
+        // Bodies first: the container's constraint is the last word (a body reaching
+        // through a wall must not push fluid out of the vessel).
+        for (const MagnetObstacle& body : bodies) keepOutside(body, x_[i], v_[i]);
         container_->constrain(xOld_[i], x_[i], v_[i]);
         // The split copy the vectorized neighbour loops gather from.
         px_[i] = x_[i].x();
@@ -742,8 +765,36 @@ double FluidSimulation::step(double dtLimit) {
         // start (so a resumed run continues exactly) and whenever it has gone stale.
         updateMagnetics(frameStart_);
         frameStart_ = false;
+        if (magnetics_->unconvergedInRow() >= SanityLimits::kMaxUnconvergedSolves) {
+            std::ostringstream msg;
+            msg.precision(3);
+            msg << "the magnetization solve ended at its iteration cap (magnetization.max_iterations = "
+                << scene_.magnetization.maxIterations << ") without converging " << magnetics_->unconvergedInRow()
+                << " times in a row at t = " << time_ << " s (residual " << magnetics_->stats().residual
+                << "): the field is wrong on every step; lower magnetization.susceptibility or raise max_iterations";
+            throw SimulationError(msg.str());
+        }
     }
-    const double dt = chooseTimeStep(dtLimit);
+    size_t fastest = 0;
+    const double speed = maxSpeed(&fastest);
+    checkSpeed(speed, fastest);
+    const double dt = chooseTimeStep(dtLimit, speed);
+    // A step near sim.min_dt that lasts: the run would crawl for hours before (if ever)
+    // failing. Shortened last steps of a frame (dt == dtLimit) do not count.
+    if (dt < SanityLimits::kNearMinDt * scene_.solver.minDt && dt < dtLimit) {
+        if (++stuckSteps_ >= SanityLimits::kMaxStuckSteps) {
+            std::ostringstream msg;
+            msg.precision(3);
+            msg << "time step stayed below " << SanityLimits::kNearMinDt << " x sim.min_dt = "
+                << SanityLimits::kNearMinDt * scene_.solver.minDt << " s for " << stuckSteps_
+                << " steps in a row at t = " << time_ << " s (dt " << dt << " s, max speed " << speed
+                << " m/s, max magnetic acceleration " << (magnetics_ ? magnetics_->maxAcceleration() : 0.0)
+                << " m/s^2): the simulation cannot make progress";
+            throw SimulationError(msg.str());
+        }
+    } else {
+        stuckSteps_ = 0;
+    }
     solver_->advanceVelocities(dt);
     integratePositions(dt);
     time_ += dt;
@@ -767,6 +818,107 @@ void FluidSimulation::advanceTo(double tEnd) {
         step(tEnd - time_);
         if (tEnd - time_ < 1e-12 * std::max(1.0, tEnd)) time_ = tEnd;
     }
+    checkSanity();
+}
+
+void FluidSimulation::setUpSanityGuard() {
+    // The parts of the speed bound (SanityGuard.hpp) fixed for the whole run.
+    limits_.speedOverride = scene_.solver.maxSpeed;
+    speedBound_.override = scene_.solver.maxSpeed;
+    const Vec3d g = scene_.solver.gravity;
+    const double gNorm = g.norm();
+    if (gNorm > 0 && !x_.empty()) {
+        // The drop from the highest point the fluid or the container's walls reach to the
+        // container's lowest point, along gravity (an unbounded container: the fluid's own
+        // height, ten times over, as chooseSpeedScales assumes).
+        const Vec3d down = g / gNorm;
+        double top = -1e300, bottom = 1e300;
+        for (const Vec3& p : x_) {
+            top = std::max(top, -p.cast<double>().dot(down));
+            bottom = std::min(bottom, -p.cast<double>().dot(down));
+        }
+        const double fluidHeight = top - bottom;
+        Vec3d lo, hi;
+        container_->bounds(lo, hi);
+        if (scene_.container.type == ContainerParams::Type::Dish)
+            hi.z() = scene_.container.center.z() + scene_.container.height;
+        double cTop = -1e300, cBottom = 1e300;
+        for (int c = 0; c < 8; ++c) {
+            const Vec3d corner((c & 1) ? hi.x() : lo.x(), (c & 2) ? hi.y() : lo.y(), (c & 4) ? hi.z() : lo.z());
+            cTop = std::max(cTop, -corner.dot(down));
+            cBottom = std::min(cBottom, -corner.dot(down));
+        }
+        const double span = 10 * std::max(fluidHeight, spacing_);
+        top = std::max(top, std::min(cTop, top + span));
+        bottom = std::min(bottom, std::max(cBottom, bottom - span));
+        speedBound_.gravity2 = 2 * gNorm * std::max(top - bottom, spacing_);
+    }
+    for (const Vec3& v : v_) speedBound_.initial2 = std::max(speedBound_.initial2, double(v.squaredNorm()));
+    // The magnets' fastest motion, sampled along each key segment (Catmull-Rom may
+    // overshoot the chord). Keys at one time (a jump) move nothing: the field's change
+    // they cause is in the magnetic energy term.
+    double u = 0;
+    for (const MagnetTrack& track : scene_.magnets)
+        for (size_t k = 0; k + 1 < track.keys.size(); ++k) {
+            const double t0 = track.keys[k].time, t1 = track.keys[k + 1].time;
+            if (!(t1 > t0)) continue;
+            constexpr int kSamples = 32;
+            Vec3d prev = track.at(t0).position;
+            for (int j = 1; j <= kSamples; ++j) {
+                const Vec3d next = track.at(t0 + (t1 - t0) * j / kSamples).position;
+                u = std::max(u, (next - prev).norm() / ((t1 - t0) / kSamples));
+                prev = next;
+            }
+        }
+    speedBound_.magnets2 = 4 * u * u;
+    magnetSpeed_ = u;
+    speedBound_.capillary2 = std::max(0.0, scene_.fluid.surfaceTension) / (rho0_ * spacing_);
+}
+
+void FluidSimulation::checkSpeed(double speed, size_t which) {
+    if (magnetics_ && magnetics_->magnetic()) {
+        const MagnetizationParams& law = magnetics_->law();
+        speedBound_.magnetic2 =
+            2 * kMu0 * langevinEnergy(magnetics_->maxFieldSeen(), law.susceptibility, law.saturation) / rho0_;
+    }
+    const double energy = speedBound_.energySpeed();
+    if (energy > 0) maxSpeedRatio_ = std::max(maxSpeedRatio_, speed / energy);
+    const double bound = speedBound_.value();
+    if (!(speed > bound) || x_.empty()) return;
+    std::ostringstream msg;
+    msg.precision(3);
+    msg << "particle " << id_[which] << " moves at " << speed << " m/s at t = " << time_ << " s (step " << steps_
+        << "), faster than this scene can make it: bound " << bound << " m/s";
+    if (speedBound_.override > 0) msg << " (sim.max_speed)";
+    else
+        msg << " = " << SanityLimits::kSpeedSafety << " x " << energy
+            << " m/s, the speed of all its energy in one particle (gravity, initial speeds, magnets' motion, field up to "
+            << (magnetics_ ? magnetics_->maxFieldSeen() : 0.0) << " A/m, surface tension; sim.max_speed overrides)";
+    msg << ": the simulation is unstable";
+    throw SimulationError(msg.str());
+}
+
+void FluidSimulation::checkSanity() {
+    size_t fastest = 0;
+    checkSpeed(maxSpeed(&fastest), fastest);
+    // Particles outside the container: constrain() never lets them out, so this is a bug.
+    const double margin = -SanityLimits::kOutsideTolerance * spacing_;
+    std::vector<uint8_t> outside(x_.size(), 0);
+    forEachParticle(x_.size(), [&](size_t i) { outside[i] = !container_->contains(x_[i].cast<double>(), margin); });
+    std::vector<uint32_t> ids;
+    for (size_t i = 0; i < x_.size(); ++i)
+        if (outside[i]) ids.push_back(id_[i]);
+    if (ids.empty()) return;
+    std::sort(ids.begin(), ids.end());
+    std::ostringstream msg;
+    msg.precision(3);
+    msg << ids.size() << " particle" << (ids.size() == 1 ? " is" : "s are") << " outside the container at t = "
+        << time_ << " s (id";
+    for (size_t k = 0; k < std::min(ids.size(), SanityLimits::kNamedParticles); ++k)
+        msg << (k ? ", " : " ") << ids[k];
+    if (ids.size() > SanityLimits::kNamedParticles) msg << ", ...";
+    msg << "): the wall constraint failed, a bug; please report it with the scene";
+    throw SimulationError(msg.str());
 }
 
 namespace {

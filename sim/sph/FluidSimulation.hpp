@@ -14,8 +14,10 @@
 #include "sim/sph/FluidMagnetics.hpp"
 #include "sim/sph/ImplicitViscosity.hpp"
 #include "sim/sph/Kernel.hpp"
+#include "sim/sph/MagnetObstacles.hpp"
 #include "sim/sph/NeighborSearch.hpp"
 #include "sim/sph/PressureSolver.hpp"
+#include "sim/sph/SanityGuard.hpp"
 #include "sim/scene/SimParams.hpp"
 
 #include <memory>
@@ -77,6 +79,14 @@ public:
     static constexpr double kExplicitViscousStep = 0.02;
     /// The pressure solver's label ("DFSPH", "WCSPH"), for progress lines and benchmarks.
     const char* pressureSolverLabel() const { return solverEntry_->label; }
+    /// The sanity guard's speed bound as of the last step (sim/sph/SanityGuard.hpp).
+    const SpeedBound& speedBound() const { return speedBound_; }
+    /// Largest particle speed so far over the scene's energy speed (the guard stops at
+    /// SanityLimits::kSpeedSafety), for the closing line and tests.
+    double maxSpeedRatio() const { return maxSpeedRatio_; }
+    /// The sanity checks of a frame's end (speed, particles inside the container); throws
+    /// SimulationError. advanceTo calls it; the speed is also checked at every step.
+    void checkSanity();
 
     /// Advances to exactly `tEnd` with as many steps as the CFL condition needs; the last
     /// step is shortened to land on tEnd. Throws SimulationError on a non-finite state.
@@ -174,7 +184,13 @@ private:
     /// The colour gradient the magnetic surface force needs (when it does), then the
     /// magnetic update of the step.
     void updateMagnetics(bool forceSolve);
-    double chooseTimeStep(double dtLimit) const;
+    double chooseTimeStep(double dtLimit, double speed) const;
+    double maxSpeed(size_t* which = nullptr) const;
+    /// The speed bound's parts that do not change during the run (gravity over the
+    /// container's height, initial speeds, the magnets' motion, capillary speed).
+    void setUpSanityGuard();
+    /// Stops the run when particle `which` at `speed` is beyond the speed bound.
+    void checkSpeed(double speed, size_t which);
     void integratePositions(double dt);
 
     SimScene scene_;
@@ -193,6 +209,11 @@ private:
     double time_ = 0;
     size_t steps_ = 0;
     StepStats stats_;
+    SanityLimits limits_;
+    SpeedBound speedBound_;
+    double maxSpeedRatio_ = 0;
+    size_t stuckSteps_ = 0;     // steps in a row with dt near sim.min_dt
+    double magnetSpeed_ = 0;    // the magnets' fastest motion between keys [m/s] (their bodies push at most this fast)
 
     // Fluid particles, sorted by (cell, id).
     std::vector<Vec3> x_, v_, a_, xOld_;

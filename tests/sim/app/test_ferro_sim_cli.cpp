@@ -126,9 +126,13 @@ saturation = 30000.0
     };
     const std::vector<Case> cases = {
         {"kind = \"uniform\"\nfield = 1e9\n", "field=1e20"},
-        {"kind = \"dipole\"\nposition = [0, 0, -0.005]\nmoment = 1e6\n", "moment=1e36"},
-        {"kind = \"bar\"\nposition = [0, 0, -0.015]\nlength = 0.02\npole_strength = -1e6\n", "pole_strength=1e7"},
-        {"kind = \"loop\"\nposition = [0, 0, -0.005]\nradius = 0.005\ncurrent = 1e9\n", "current=2e9"},
+        // At these strengths a magnet's body is half a metre across (magnetBodyRadius: a
+        // 0.58 m NdFeB sphere, a 0.52 m pole face, a 0.56 m wire) and solid: placed 5 mm
+        // under the dish it would fill it (refused, exit 2, naming the magnet: checked below),
+        // so these sit just outside their bodies, under the dish.
+        {"kind = \"dipole\"\nposition = [0, 0, -0.6]\nmoment = 1e6\n", "moment=1e36"},
+        {"kind = \"bar\"\nposition = [0, 0, -0.56]\nlength = 0.02\npole_strength = -1e6\n", "pole_strength=1e7"},
+        {"kind = \"loop\"\nposition = [0, 0, -0.6]\nradius = 0.005\ncurrent = 1e9\n", "current=2e9"},
     };
     for (const Case& c : cases) {
         const std::string scene = tmp.write("s.toml", fluid + c.magnet);
@@ -156,6 +160,13 @@ saturation = 30000.0
             REQUIRE(nonFinite == 0);
         }
     }
+    // A magnet whose body fills the fluid is refused up front, naming it.
+    const std::string scene = tmp.write("s.toml", fluid + "kind = \"dipole\"\nposition = [0, 0, -0.005]\nmoment = 1e6\n");
+    const CommandResult r = run(kSim + " " + scene + " --out " + tmp.file("solid") + " --quiet --max-frames 1");
+    CAPTURE(r.output);
+    REQUIRE(r.code == 2);
+    REQUIRE(lines(r.output) == 1);
+    REQUIRE(r.output.find("magnets[0]: the magnet's body") != std::string::npos);
 }
 
 TEST_CASE("a blow-up stops with a clear message and keeps the frames written", "[cli]") {

@@ -1,6 +1,7 @@
 // Analytic magnet fields (sim/magnetics/MagnetField): closed forms, Biot-Savart, far-field limits,
 // softening and keyframe interpolation.
 #include "sim/magnetics/MagnetField.hpp"
+#include "sim/magnetics/MagnetKinds.hpp"
 #include "sim/core/Constants.hpp"
 
 #include <Eigen/Geometry>
@@ -68,25 +69,28 @@ Magnet loop(const Vec3d& pos, const Vec3d& dir, double current, double radius) {
 TEST_CASE("Dipole field matches the closed form", "[magnet]") {
     const double mom = 2.5;
     const Magnet d = dipole(Vec3d(0.1, -0.2, 0.3), Vec3d(0, 0, 2), mom); // unnormalized axis
+    // The closed form holds outside the magnet's body (magnetBodyRadius, 7.9 mm here): the
+    // field differs from it by (1 + (a/r)^8)^(-3/8), 1.4e-7 at r = 5 cm, hence 1e-6.
     const double r = 0.05;
     // On the axis: H = 2 m / (4 pi r^3) along the axis, either side.
     for (double sgn : {1.0, -1.0}) {
         const Vec3d H = magnetField(d, d.position + Vec3d(0, 0, sgn * r));
-        CHECK(relErr(H, Vec3d(0, 0, 2 * mom / (4 * kPi * r * r * r))) < 1e-14);
+        CHECK(relErr(H, Vec3d(0, 0, 2 * mom / (4 * kPi * r * r * r))) < 1e-6);
     }
     // Equatorial plane: H = -m / (4 pi r^3).
     for (const Vec3d& e : {Vec3d(1, 0, 0), Vec3d(0, -1, 0), Vec3d(1, 1, 0).normalized()}) {
         const Vec3d H = magnetField(d, d.position + r * e);
-        CHECK(relErr(H, Vec3d(0, 0, -mom / (4 * kPi * r * r * r))) < 1e-14);
+        CHECK(relErr(H, Vec3d(0, 0, -mom / (4 * kPi * r * r * r))) < 1e-6);
     }
     // General points against the vector formula, tilted dipole.
     const Vec3d mvec = mom * Vec3d(1, 2, -0.5).normalized();
     const Magnet t = dipole(Vec3d(0, 0, 0), Vec3d(1, 2, -0.5), mom);
-    for (const Vec3d& x : {Vec3d(0.3, 0.1, 0.02), Vec3d(-1e-3, 2e-3, 5e-4), Vec3d(10, -20, 5)}) {
+    // (A point inside the 7.9 mm body gets the bounded interior field, not the closed form.)
+    for (const Vec3d& x : {Vec3d(0.3, 0.1, 0.02), Vec3d(-0.03, 0.06, 0.015), Vec3d(10, -20, 5)}) {
         const double rn = x.norm();
         const Vec3d rh = x / rn;
         const Vec3d ref = (3 * mvec.dot(rh) * rh - mvec) / (4 * kPi * rn * rn * rn);
-        CHECK(relErr(magnetField(t, x), ref) < 1e-13);
+        CHECK(relErr(magnetField(t, x), ref) < 1e-6);
     }
 }
 
@@ -95,7 +99,8 @@ TEST_CASE("Dipole gradient: analytic, divergence- and curl-free", "[magnet]") {
     for (const Vec3d& x : {Vec3d(0.1, 0.05, 0.02), Vec3d(-0.02, 0.01, 0.03), Vec3d(1, 2, 3)}) {
         const Mat3d J = fieldGradient(d, x);
         const double scale = J.norm();
-        CHECK(std::abs(J.trace()) < 1e-13 * scale);
+        // div H = -div M of the magnet's body, which reaches out as (a/r)^8: ~1e-8 here.
+        CHECK(std::abs(J.trace()) < 1e-6 * scale);
         CHECK((J - J.transpose()).norm() < 1e-13 * scale);
         const double h = 1e-5 * (x - d.position).norm();
         CHECK((J - numericGradient(d, x, h)).norm() < 1e-8 * scale);
@@ -109,7 +114,7 @@ TEST_CASE("Dipole gradient: analytic, divergence- and curl-free", "[magnet]") {
     for (const Vec3d& x : {Vec3d(0.03, 0.01, 0.0), Vec3d(0.0, 0.0, 0.05)}) {
         const Mat3d J = fieldGradient(bar, x);
         const double scale = J.norm();
-        CHECK(std::abs(J.trace()) < 1e-12 * scale);
+        CHECK(std::abs(J.trace()) < 1e-6 * scale);
         CHECK((J - J.transpose()).norm() < 1e-12 * scale);
         CHECK((J - numericGradient(bar, x, 1e-7)).norm() < 1e-7 * scale);
     }
@@ -259,10 +264,11 @@ TEST_CASE("Softening keeps singular points finite without changing the far field
     bar.length = 0.02;
     Magnet l = loop(Vec3d(0, 0, 0), Vec3d(0, 0, 1), 2.0, 0.05);
 
-    // eps = 0 exactly at the singular point: documented zero, never NaN.
-    CHECK(magnetField(d, d.position).norm() == 0.0);
+    // eps = 0 exactly at the singular point: finite, never NaN; the magnet's body bounds it
+    // (a dipole's centre: -M/3 of a sphere magnetized at kStrongestMagnetization).
+    CHECK(magnetField(d, d.position).norm() <= kStrongestMagnetization / 3 * (1 + 1e-12));
     CHECK(magnetField(bar, Vec3d(0, 0, 0.01)).allFinite());
-    CHECK(magnetField(l, Vec3d(0.05, 0, 0)).norm() == 0.0);
+    CHECK(magnetField(l, Vec3d(0.05, 0, 0)).allFinite());
     CHECK(fieldGradient(d, d.position).allFinite());
     CHECK(fieldGradient(l, Vec3d(0.05, 0, 0)).allFinite());
 

@@ -1,0 +1,270 @@
+// The extremes matrix of issue 15: tiny dish scenes (2 cm across, 500 particles) at the
+// edges of every parameter. Each case either runs to its end stably (no NaN, every
+// particle inside the dish, the fluid compressed by less than 2 % on average) or stops at
+// once with a one-line reason and the documented exit code (3: the run failed, frames
+// written before it kept; 2: refused up front, nothing written). Each case prints its
+// outcome, frames, wall time and the closing line; times are printed, never asserted.
+#include "sim/core/ExitCodes.hpp"
+#include "sim/core/ParticleFile.hpp"
+#include "tests/TestUtil.hpp"
+
+#include <catch2/catch.hpp>
+
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <filesystem>
+#include <iostream>
+
+namespace fs = std::filesystem;
+using namespace ferro;
+using namespace ferro::test;
+
+namespace {
+
+const std::string kSim = std::string(FERRO_BINARY_DIR) + "/bin/ferro-sim";
+
+/// The dish of every case: radius 1 cm, wall 1 cm, a 4 mm layer of 500 particles of an
+/// oil-based ferrofluid (spacing 1.3 mm), and one magnet that the rows replace.
+const std::string kDish = R"([shot]
+fps = 100
+duration = 0.05
+[fluid]
+rest_density = 1200.0
+viscosity = 5e-6
+[[fluid.block]]
+shape = "cylinder"
+radius = 0.01
+height = 0.004
+count = 500
+[container]
+type = "dish"
+radius = 0.01
+height = 0.01
+[magnetization]
+susceptibility = 1.5
+saturation = 35000.0
+)";
+constexpr double kDishRadius = 0.01;
+constexpr double kDishHeight = 0.01;
+
+enum class Expect {
+    Stable,      ///< must run to the end stably
+    StableOrStop ///< runs stably, or the sanity guard stops it at once (exit 3, one line)
+};
+
+struct Row {
+    std::string name;
+    std::string magnets;       ///< [[magnets]] tables appended to the dish
+    std::string overrides;     ///< --set ... arguments
+    Expect expect = Expect::Stable;
+    int frames = 5;
+};
+
+int lines(const std::string& s) { return int(std::count(s.begin(), s.end(), '\n')); }
+
+std::string outFrame(const std::string& dir, int f) {
+    char name[32];
+    std::snprintf(name, sizeof name, "particles_%04d.ply", f);
+    return (fs::path(dir) / name).string();
+}
+
+/// Checks one written frame: finite, inside the dish, compressed by less than 2 % on
+/// average (mean of max(rho / rho0 - 1, 0): free-surface particles have a density deficit
+/// that says nothing about the volume, so only compression counts).
+/// Returns the particles above the dish's rim (printed, not asserted: the fluid may splash).
+size_t checkFrame(const std::string& path, size_t particles) {
+    const ParticleTable t = readParticleFile(path);
+    CAPTURE(path);
+    REQUIRE(t.rows() == particles);
+    size_t nonFinite = 0;
+    for (float v : t.values) nonFinite += !std::isfinite(v);
+    REQUIRE(nonFinite == 0);
+    const double rho0 = t.commentNumber("rest_density", 0);
+    const double spacing = t.commentNumber("spacing", 0);
+    const auto x = t.vec3("x", "y", "z");
+    const int rho = t.column("density");
+    size_t outside = 0, aboveRim = 0;
+    double compression = 0;
+    for (size_t i = 0; i < t.rows(); ++i) {
+        aboveRim += x[i].z() > kDishHeight;
+        const double r = std::hypot(double(x[i].x()), double(x[i].y()));
+        outside += r > kDishRadius + 0.01 * spacing || x[i].z() < -0.01 * spacing;
+        compression += std::max(0.0, double(t.at(i, rho)) / rho0 - 1);
+    }
+    REQUIRE(outside == 0);
+    CAPTURE(compression / double(t.rows()));
+    REQUIRE(compression / double(t.rows()) < 0.02);
+    return aboveRim;
+}
+
+void runRow(const Row& row, size_t particles = 500) {
+    const TempDir tmp("extremes");
+    const std::string scene = tmp.write("s.toml", kDish + row.magnets);
+    const std::string out = tmp.file("out");
+    const auto start = std::chrono::steady_clock::now();
+    const CommandResult r = runCommand(kSim + " " + scene + " --out " + out + " --threads 2 --max-frames " +
+                                       std::to_string(row.frames) + " " + row.overrides);
+    const double wall = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+    int written = 0;
+    while (fs::exists(outFrame(out, written))) ++written;
+    // The progress lines end with the closing line (steps, wall time, speed ratio).
+    std::string closing = r.output.substr(0, r.output.size() > 0 ? r.output.size() - 1 : 0);
+    closing = closing.substr(closing.rfind('\n') == std::string::npos ? 0 : closing.rfind('\n') + 1);
+    std::printf("extremes  %-34s exit %d  frames %d/%d  wall %5.1f s  | %s\n", row.name.c_str(), r.code, written - 1,
+                row.frames, wall, closing.c_str());
+    std::fflush(stdout);
+    CAPTURE(row.name, row.overrides, r.output);
+    if (r.code == kExitOk) {
+        REQUIRE(written == row.frames + 1);
+    } else {
+        REQUIRE(row.expect == Expect::StableOrStop);
+        REQUIRE(r.code == kExitSimulationFailed);
+        // One line (the progress lines before it are from frames that were written).
+        const std::string last = r.output.substr(r.output.rfind("ferro-sim: error"));
+        REQUIRE(lines(last) == 1);
+        REQUIRE(written >= 1);
+    }
+    size_t aboveRim = 0;
+    for (int f = 0; f < written; ++f) aboveRim = std::max(aboveRim, checkFrame(outFrame(out, f), particles));
+    std::printf("extremes  %-34s particles above the rim: at most %zu in a frame\n", row.name.c_str(), aboveRim);
+    std::fflush(stdout);
+}
+
+std::string dipole(double z, double moment, const std::string& extra = "") {
+    return "[[magnets]]\nkind = \"dipole\"\nposition = [0, 0, " + std::to_string(z) +
+           "]\nmoment = " + std::to_string(moment) + "\n" + extra;
+}
+
+} // namespace
+
+TEST_CASE("extremes: magnetization law from chi0 = 0 to 10, saturation 100 A/m to 1 MA/m (issue 15)", "[extremes]") {
+    // A 1 A m^2 dipole 5 mm under the floor (the field at the floor is about 1.3e6 A/m,
+    // far beyond saturation for every row).
+    const std::string magnet = dipole(-0.005, 1.0);
+    const std::vector<Row> rows = {
+        {"chi0 0 (not magnetic)", magnet, "--set magnetization.susceptibility=0"},
+        {"chi0 0.1", magnet, "--set magnetization.susceptibility=0.1"},
+        {"chi0 1.5 Ms 35 kA/m", magnet, ""},
+        {"chi0 10 Ms 35 kA/m", magnet, "--set magnetization.susceptibility=10"},
+        {"Ms 100 A/m", magnet, "--set magnetization.saturation=100"},
+        {"Ms 1e6 A/m", magnet, "--set magnetization.saturation=1e6", Expect::StableOrStop},
+        // Issue 15 item: chi0 = 10 linear near a strong dipole 2 mm under the floor (no
+        // frame after 120 s, dt at 1.3e-7 s, the magnetization solve at its cap).
+        {"chi0 10 linear, dipole 2 mm under", dipole(-0.002, 1.0),
+         "--set magnetization.susceptibility=10 --set magnetization.saturation=0", Expect::StableOrStop, 2},
+    };
+    for (const Row& row : rows) runRow(row);
+}
+
+TEST_CASE("extremes: applied field from 0 to far beyond saturation, switched off or jumping in one frame (issue 15)", "[extremes]") {
+    const std::vector<Row> rows = {
+        {"uniform field 0", "[[magnets]]\nkind = \"uniform\"\nfield = 0\n", ""},
+        {"uniform field 1e7 A/m (saturated)", "[[magnets]]\nkind = \"uniform\"\nfield = 1e7\n", ""},
+        // Full strength, then off between frame 1 and 2 (keys 1 ms apart).
+        {"field switched off in one frame", dipole(-0.005, 1.0,
+             "[[magnets.keys]]\ntime = 0.01\nmoment = 1.0\n[[magnets.keys]]\ntime = 0.011\nmoment = 0.0\n"), ""},
+        // Under the floor, then a metre away within one frame.
+        {"magnet jumps a metre in one frame", dipole(-0.005, 1.0,
+             "[[magnets.keys]]\ntime = 0.01\nposition = [0, 0, -0.005]\n[[magnets.keys]]\ntime = 0.02\nposition = [1.0, 0, -0.005]\n"), ""},
+    };
+    for (const Row& row : rows) runRow(row);
+}
+
+TEST_CASE("extremes: magnets touching the dish and inside the fluid (issue 15)", "[extremes]") {
+    // A magnet inside the fluid used to throw most particles above the rim at 5-15 m/s
+    // with exit 0: its field, softened over one spacing only, reached 100 T. Sources are
+    // now bounded by the smallest real body that carries them (magnetBodyRadius), and that
+    // body is a solid the fluid is seeded around and kept out of (sim/sph/MagnetObstacles).
+    // Measured (5 frames): all five run to the end, max speed 0.67-1.41 x the energy speed
+    // (the loop used to be stopped by the guard at 18.6 m/s in frame 3).
+    const std::vector<Row> rows = {
+        {"dipole touching the floor", dipole(0.0, 1.0), "", Expect::StableOrStop},
+        {"dipole inside the fluid", dipole(0.002, 1.0), "", Expect::StableOrStop},
+        {"weak dipole inside the fluid", dipole(0.002, 0.01), "", Expect::StableOrStop},
+        {"bar pole inside the fluid",
+         "[[magnets]]\nkind = \"bar\"\nposition = [0, 0, 0]\nlength = 0.004\npole_strength = 50\n", "",
+         Expect::StableOrStop},
+        {"loop through the fluid", "[[magnets]]\nkind = \"loop\"\nposition = [0, 0, 0.002]\nradius = 0.005\ncurrent = 1000\n",
+         "", Expect::StableOrStop},
+    };
+    for (const Row& row : rows) runRow(row);
+}
+
+TEST_CASE("extremes: surface tension 0 to 1 N/m, one particle (issue 15)", "[extremes]") {
+    const std::string magnet = dipole(-0.005, 1.0);
+    const std::vector<Row> rows = {
+        {"surface tension 0", magnet, "--set fluid.surface_tension=0"},
+        {"surface tension 0.07 N/m", magnet, "--set fluid.surface_tension=0.07"},
+        {"surface tension 1 N/m", magnet, "--set fluid.surface_tension=1"},
+    };
+    for (const Row& row : rows) runRow(row);
+    // One particle: a block that holds exactly one (a count of 1 in the 1 cm cylinder makes
+    // the spacing-by-count bisection find no lattice point: refused with exit 2, a seed
+    // limitation noted in the report, not a stability question).
+    // The particle sits on the floor's centre, where the 1 A m^2 dipole's solid body (a
+    // 5.8 mm sphere 5 mm under the floor) reaches 0.8 mm into the dish: that scene is
+    // refused (exit 2, naming magnets[0]); so this row's magnet is 1 cm under the floor.
+    runRow({"one particle", dipole(-0.01, 1.0),
+            "--set fluid.block.0.count=1 --set fluid.block.0.radius=0.0007 --set fluid.block.0.height=0.0014"}, 1);
+}
+
+// Viscosity rows, 1e-6 .. 1 m^2/s: to be enabled (tag [extremes] without [.]) once the
+// implicit viscosity solve lands (issue 15, another branch). Until then the high rows
+// explode (1e-2: 13.5 m/s in one frame) and the sanity guard stops them with exit 3, or
+// take tens of thousands of explicit steps per frame; hidden so the suite stays fast.
+TEST_CASE("extremes: viscosity 1e-6 to 1 m^2/s (issue 15, waits for the implicit viscosity solve)", "[.][extremes][viscosity][!mayfail]") {
+    const std::string magnet = dipole(-0.005, 1.0);
+    const std::vector<Row> rows = {
+        {"viscosity 1e-6", magnet, "--set fluid.viscosity=1e-6"},
+        {"viscosity 1e-4", magnet, "--set fluid.viscosity=1e-4"},
+        {"viscosity 1e-2", magnet, "--set fluid.viscosity=1e-2"},
+        {"viscosity 1", magnet, "--set fluid.viscosity=1"},
+    };
+    for (const Row& row : rows) runRow(row);
+}
+
+TEST_CASE("extremes: a run larger than the machine's memory is refused up front, naming the key (issue 15)", "[extremes]") {
+    const TempDir tmp("extremes_memory");
+    const std::string scene = tmp.write("s.toml", kDish);
+    const std::string out = tmp.file("out");
+    const auto start = std::chrono::steady_clock::now();
+    const CommandResult r = runCommand(kSim + " " + scene + " --out " + out + " --set fluid.block.0.count=100000000000");
+    const double wall = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+    std::printf("extremes  %-34s exit %d  wall %5.1f s  | %s", "1e11 particles", r.code, wall, r.output.c_str());
+    CAPTURE(r.output);
+    REQUIRE(r.code == kExitBadInput);
+    REQUIRE(lines(r.output) == 1);
+    REQUIRE(r.output.find("fluid.block[0].count: the run needs about") != std::string::npos);
+    REQUIRE(!fs::exists(outFrame(out, 0)));
+}
+
+// One million particles, one step: prints the memory (peak RSS) and the time per step
+// (measured: 1.41 GB, one step 3.3 s, 7 s in all on two cores).
+TEST_CASE("extremes: 1,000,000 particles, memory and time per step printed", "[extremes][million]") {
+    const TempDir tmp("extremes_million");
+    const std::string scene = tmp.write("s.toml", R"([shot]
+fps = 10000
+duration = 0.0001
+[fluid]
+rest_density = 1200.0
+[[fluid.block]]
+shape = "cylinder"
+radius = 0.05
+height = 0.02
+count = 1000000
+[container]
+type = "dish"
+radius = 0.05
+height = 0.03
+)");
+    const std::string out = tmp.file("out");
+    const auto start = std::chrono::steady_clock::now();
+    const CommandResult r =
+        runCommand("/usr/bin/time -f 'peak RSS %M kB' " + kSim + " " + scene + " --out " + out + " --max-frames 1");
+    const double wall = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+    std::printf("extremes  1,000,000 particles: exit %d, wall %.1f s\n%s", r.code, wall, r.output.c_str());
+    REQUIRE(r.code == kExitOk);
+    REQUIRE(r.output.find("peak RSS") != std::string::npos);
+    REQUIRE(r.output.find("steps/s") != std::string::npos);
+}
