@@ -83,22 +83,23 @@ double SurfaceFields::magnetization(const Vec3d& x, const Vec3d& H) const
     return *std::max_element(h.begin(), h.end());
 }
 
-double SurfaceFields::heightFade(const Vec3d& x, const Vec3d& H) const
+double SurfaceFields::historyMean(const Vec3d& x, const Vec3d& H, double (SurfaceFields::*fade)(double) const) const
 {
     const std::vector<double> h = magnetizationHistory(x, H);
-    if (h.size() == 1) return magnetizationFade(h[0]);
+    if (h.size() == 1) return (this->*fade)(h[0]);
     double f = 0;
-    for (size_t k = 0; k < h.size(); ++k) f += in_.pastWeights[k] * magnetizationFade(h[k]);
+    for (size_t k = 0; k < h.size(); ++k) f += in_.pastWeights[k] * (this->*fade)(h[k]);
     return f;
+}
+
+double SurfaceFields::heightFade(const Vec3d& x, const Vec3d& H) const
+{
+    return historyMean(x, H, &SurfaceFields::magnetizationFade);
 }
 
 double SurfaceFields::surfaceGate(const Vec3d& x, const Vec3d& H) const
 {
-    const std::vector<double> h = magnetizationHistory(x, H);
-    if (h.size() == 1) return magnetizationGate(h[0]);
-    double f = 0;
-    for (size_t k = 0; k < h.size(); ++k) f += in_.pastWeights[k] * magnetizationGate(h[k]);
-    return f;
+    return historyMean(x, H, &SurfaceFields::magnetizationGate);
 }
 
 double SurfaceFields::magnetizationFade(double M) const

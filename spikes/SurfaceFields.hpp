@@ -65,6 +65,9 @@ public:
     bool wetted(const Vec3d& x) const;
 
 private:
+    /// The pastWeights-weighted mean of `fade` over magnetizationHistory(x, H).
+    double historyMean(const Vec3d& x, const Vec3d& H, double (SurfaceFields::*fade)(double) const) const;
+
     const SpikeInput& in_;
     const SpikeParams& p_;
     double Mc_;
