@@ -121,8 +121,7 @@ void addMagnetHistory(const SpikeScene& scene, double time, SpikeInput& in)
         const double w = std::exp(-k * step / tau);
         in.pastWeights.push_back(w);
         total += w;
-        if (k == 0) continue;
-        std::vector<Magnet> past;
+        std::vector<Magnet> past; // k = 0: the tracks now, the reference the past is scaled by
         for (const MagnetTrack& track : scene.magnets) past.push_back(track.at(time - k * step));
         in.pastMagnets.push_back(std::move(past));
     }

@@ -64,9 +64,10 @@ struct SpikeInput {
     SpikeParticles particles;
     /// Field of the magnetized particles at a point [A/m] (null = magnets only).
     std::function<Vec3d(const Vec3d&)> particleField;
-    /// The magnets' recent past for SpikeParams::growthTime: the magnets at earlier times,
-    /// pastWeights[k] the weight of pastMagnets[k]; pastWeights.front() is the weight of
-    /// `magnets` (now). Empty = no lag.
+    /// The magnets' recent past for SpikeParams::growthTime, from the scene's tracks:
+    /// pastMagnets[k] at k steps back (k = 0: now, by the tracks, the reference the past is
+    /// compared with, so header magnets softened differently never make a still field lag),
+    /// pastWeights[k] its weight. Empty = no lag.
     std::vector<std::vector<Magnet>> pastMagnets;
     std::vector<double> pastWeights;
 };

@@ -67,10 +67,11 @@ std::vector<double> SurfaceFields::magnetizationHistory(const Vec3d& x, const Ve
     const double Hm = magnetField(in_.magnets, x).norm();
     const double scale = Hm > 0 ? H.norm() / Hm : 1.0;
     const MagnetizationParams& law = in_.fluid.law;
-    const double now = langevinMagnetization(scale * Hm, law.susceptibility, law.saturation);
-    for (const std::vector<Magnet>& past : in_.pastMagnets) {
-        const double then = langevinMagnetization(scale * magnetField(past, x).norm(), law.susceptibility,
-                                                  law.saturation);
+    const double now = langevinMagnetization(scale * magnetField(in_.pastMagnets[0], x).norm(), law.susceptibility,
+                                             law.saturation);
+    for (size_t k = 1; k < in_.pastMagnets.size(); ++k) {
+        const double then = langevinMagnetization(scale * magnetField(in_.pastMagnets[k], x).norm(),
+                                                  law.susceptibility, law.saturation);
         // No field now (a magnet just switched off): the law's past value, unscaled.
         history.push_back(now > 0 ? M * then / now : then);
     }
