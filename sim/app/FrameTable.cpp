@@ -51,4 +51,17 @@ ParticleTable frameTable(const FluidSimulation& sim, int frame, const std::strin
     return t;
 }
 
+FrameState frameState(const ParticleTable& t) {
+    FrameState s;
+    s.x = t.vec3("x", "y", "z");
+    s.v = t.vec3("vx", "vy", "vz");
+    if (const int col = t.column("pressure"); col >= 0)
+        for (size_t i = 0; i < t.rows(); ++i) s.p.push_back(t.at(i, col));
+    if (t.column("hx") >= 0 && t.column("mx") >= 0) {
+        s.H = t.vec3("hx", "hy", "hz");
+        s.M = t.vec3("mx", "my", "mz");
+    }
+    return s;
+}
+
 } // namespace ferro

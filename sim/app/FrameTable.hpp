@@ -3,6 +3,7 @@
 #include "sim/core/ParticleFile.hpp"
 
 #include <string>
+#include <vector>
 
 namespace ferro {
 
@@ -13,5 +14,15 @@ class FluidSimulation;
 /// spacing, support_radius, particle_mass, rest_density, scene, scene_fingerprint, the magnets
 /// at the current time with the fluid's law, magnetization_interval).
 ParticleTable frameTable(const FluidSimulation& sim, int frame, const std::string& fingerprint);
+
+/// The simulation state a particle file holds, in id order: what FluidSimulation::setState
+/// takes to continue from it (resume, the pre-roll cache).
+struct FrameState {
+    std::vector<Vec3> x, v;   ///< positions [m], velocities [m/s]
+    std::vector<Real> p;      ///< pressures [Pa] (the DFSPH warm start); empty without the column
+    std::vector<Vec3> H, M;   ///< field, magnetization [A/m] (the solve's warm start); empty without
+};
+/// Reads a FrameState from a frameTable. Throws ParticleFileError without x y z vx vy vz.
+FrameState frameState(const ParticleTable& t);
 
 } // namespace ferro

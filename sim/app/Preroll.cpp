@@ -39,12 +39,6 @@ double fallHeight(const FluidSimulation& sim, const Vec3d& g) {
     return hi > lo ? hi - lo : 0.0;
 }
 
-std::string num(double d) {
-    char b[32];
-    std::snprintf(b, sizeof b, "%.17g", d);
-    return b;
-}
-
 } // namespace
 
 SimScene frozenAtStart(const SimScene& scene) {
@@ -63,8 +57,8 @@ std::string prerollFingerprint(const SimScene& scene, const PrerollOptions& opt)
     std::vector<Magnet> atStart;
     for (const MagnetTrack& t : scene.magnets) atStart.push_back(t.at(0.0));
     writeMagnetComments(magnets, atStart);
-    std::string key = opt.sceneFingerprint + "|preroll " + num(scene.shot.preroll) + " " +
-                      num(scene.shot.prerollRestSpeed) + " " + num(scene.shot.fps);
+    std::string key = opt.sceneFingerprint + "|preroll " + formatNumber(scene.shot.preroll) + " " +
+                      formatNumber(scene.shot.prerollRestSpeed) + " " + formatNumber(scene.shot.fps);
     for (const auto& [k, v] : magnets.comments) key += "|" + k + " " + v;
     return hashHex(key);
 }
@@ -72,20 +66,11 @@ std::string prerollFingerprint(const SimScene& scene, const PrerollOptions& opt)
 PrerollState settleInitialState(const SimScene& scene, const PrerollOptions& opt) {
     const std::string fingerprint = prerollFingerprint(scene, opt);
     PrerollState out;
-    FluidSimulation sim(frozenAtStart(scene));
-
     if (!opt.cachePath.empty() && std::filesystem::exists(opt.cachePath)) {
         try {
             const ParticleTable t = readParticleFile(opt.cachePath);
-            if (t.comment("preroll_fingerprint") == fingerprint && t.rows() == sim.size()) {
-                out.x = t.vec3("x", "y", "z");
-                out.v = t.vec3("vx", "vy", "vz");
-                if (const int col = t.column("pressure"); col >= 0)
-                    for (size_t i = 0; i < t.rows(); ++i) out.p.push_back(t.at(i, col));
-                if (t.column("hx") >= 0 && t.column("mx") >= 0) {
-                    out.H = t.vec3("hx", "hy", "hz");
-                    out.M = t.vec3("mx", "my", "mz");
-                }
+            if (t.comment("preroll_fingerprint") == fingerprint && t.rows() == opt.particles) {
+                out.state = frameState(t);
                 out.simulated = t.commentNumber("preroll_time", 0);
                 out.rmsSpeed = t.commentNumber("preroll_rms_speed", 0);
                 out.fromCache = true;
@@ -99,6 +84,8 @@ PrerollState settleInitialState(const SimScene& scene, const PrerollOptions& opt
         }
     }
 
+    // Only on a cache miss: the frozen scene's simulation.
+    FluidSimulation sim(frozenAtStart(scene));
     const double fps = scene.shot.fps;
     const double gn = scene.solver.gravity.norm();
     const double restFrom = gn > 0 ? std::sqrt(2 * fallHeight(sim, scene.solver.gravity) / gn) : 0.0;
@@ -115,17 +102,14 @@ PrerollState settleInitialState(const SimScene& scene, const PrerollOptions& opt
         if (t >= restFrom && out.rmsSpeed < scene.shot.prerollRestSpeed) break;
     }
     out.simulated = sim.time();
-    out.x = sim.positionsById();
-    out.v = sim.velocitiesById();
-    out.p = sim.pressuresById();
-    out.H = sim.fieldById();
-    out.M = sim.magnetizationById();
-
+    // The state as the cache holds it (float columns), so a run from the cache and this one
+    // start from the same numbers.
+    ParticleTable t = frameTable(sim, -1, {});
+    out.state = frameState(t);
     if (!opt.cachePath.empty()) {
-        ParticleTable t = frameTable(sim, -1, {});
         t.setComment("preroll_fingerprint", fingerprint);
-        t.setComment("preroll_time", num(out.simulated));
-        t.setComment("preroll_rms_speed", num(out.rmsSpeed));
+        t.setComment("preroll_time", formatNumber(out.simulated));
+        t.setComment("preroll_rms_speed", formatNumber(out.rmsSpeed));
         writeParticleFile(opt.cachePath, t);
     }
     if (!opt.quiet) {

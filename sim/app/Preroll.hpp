@@ -3,7 +3,7 @@
 // frame 0, with every magnet held as it is at t = 0, so a shot starts from a settled fluid
 // (no ring wave from a released block). The settled state is cached in a particle file and
 // reused while everything it depends on stays the same.
-#include "sim/core/Types.hpp"
+#include "sim/app/FrameTable.hpp"
 #include "sim/scene/SimParams.hpp"
 
 #include <string>
@@ -16,14 +16,13 @@ struct PrerollOptions {
     /// Hash of the scene sections the pre-roll depends on ([fluid], [container], [sim],
     /// [magnetization]); the magnets at t = 0 and the [shot] pre-roll keys are added to it.
     std::string sceneFingerprint;
+    size_t particles = 0;     ///< the scene's particle count: a cache holding another count is stale
     bool quiet = false;       ///< no progress lines on stderr
 };
 
-/// The settled initial state, in id order.
+/// The settled initial state.
 struct PrerollState {
-    std::vector<Vec3> x, v;   ///< positions [m], velocities [m/s]
-    std::vector<Real> p;      ///< pressures [Pa] (the DFSPH warm start)
-    std::vector<Vec3> H, M;   ///< field and magnetization [A/m] (the solve's warm start)
+    FrameState state;         ///< in id order
     double simulated = 0;     ///< pre-roll time simulated [s]
     double rmsSpeed = 0;      ///< RMS particle speed at its end [m/s]
     bool fromCache = false;   ///< read from opt.cachePath rather than simulated
@@ -36,7 +35,7 @@ SimScene frozenAtStart(const SimScene& scene);
 std::string prerollFingerprint(const SimScene& scene, const PrerollOptions& opt);
 
 /// Returns the settled state: from the cache when its `preroll_fingerprint` comment equals
-/// prerollFingerprint() and it holds the scene's particle count, else by simulating
+/// prerollFingerprint() and it holds opt.particles particles, else by simulating
 /// frozenAtStart(scene) for scene.shot.preroll seconds or until the RMS speed is below
 /// scene.shot.prerollRestSpeed (checked every 1/fps once t >= sqrt(2 H / g), H the height of
 /// the container's walls or of the fluid without one), then writing the cache atomically.

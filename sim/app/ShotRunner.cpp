@@ -117,15 +117,8 @@ void runShot(const SimScene& scene, const RunOptions& opt) {
         if (t.rows() != sim.size())
             throw SceneError(particleFramePath(opt.outDir, *it) + ": holds " + std::to_string(t.rows()) +
                              " particles, the scene makes " + std::to_string(sim.size()));
-        std::vector<Real> pressure;
-        if (const int col = t.column("pressure"); col >= 0)
-            for (size_t i = 0; i < t.rows(); ++i) pressure.push_back(t.at(i, col));
-        std::vector<Vec3> H, M;
-        if (t.column("hx") >= 0 && t.column("mx") >= 0) {
-            H = t.vec3("hx", "hy", "hz");
-            M = t.vec3("mx", "my", "mz");
-        }
-        sim.setState(*it / fps, t.vec3("x", "y", "z"), t.vec3("vx", "vy", "vz"), pressure, H, M);
+        const FrameState state = frameState(t);
+        sim.setState(*it / fps, state.x, state.v, state.p, state.H, state.M);
         sim.setMagnetizationInterval(size_t(t.commentNumber("magnetization_interval", 0)));
         frame = *it;
         resumed = true;
@@ -151,7 +144,8 @@ void runShot(const SimScene& scene, const RunOptions& opt) {
             po.cachePath = opt.prerollCache.empty() ? (fs::path(opt.outDir) / "preroll.ply").string() : opt.prerollCache;
             po.sceneFingerprint = opt.prerollFingerprint.empty() ? opt.fingerprint : opt.prerollFingerprint;
             po.quiet = opt.quiet;
-            const PrerollState settled = settleInitialState(scene, po);
+            po.particles = sim.size();
+            const FrameState settled = settleInitialState(scene, po).state;
             sim.setState(0.0, settled.x, settled.v, settled.p, settled.H, settled.M);
         }
         writeParticleFile(particleFramePath(opt.outDir, 0), frameTable(sim, 0, opt.fingerprint));
