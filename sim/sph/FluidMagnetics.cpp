@@ -30,7 +30,8 @@ const char* solverName(MagnetizationParams::Solver s) {
 
 FluidMagnetics::FluidMagnetics(const SimScene& scene, double particleVolume, double spacing)
     : tracks_(scene.magnets), law_(scene.magnetization), volume_(particleVolume), spacing_(spacing),
-      rho0_(scene.fluid.restDensity), gravity_(scene.solver.gravity.norm()) {
+      rho0_(scene.fluid.restDensity), gravity_(scene.solver.gravity.norm()),
+      curve_(scene.magnetization.susceptibility, scene.magnetization.saturation) {
     if (active() && magnetic()) solver_ = std::make_unique<MagnetizationSolver>(law_);
     // The surface model's scales from a flat cubic lattice surface (the seed's lattice,
     // support 2 spacings as FluidSimulation uses): |grad c| of the top layer and the
@@ -159,6 +160,16 @@ void FluidMagnetics::solve(const std::vector<Vec3>& x, bool forced) {
     }
     lastFieldError_ = st.fieldError;
     traction_ = st.solver != MagnetizationParams::Solver::External;
+    if (traction_) {
+        // The body force's M: the solve's M along the applied field against its strength.
+        std::vector<double> h(n), along(n);
+        forEachParticle(n, [&](size_t i) {
+            const Vec3d he = Hext_[i].cast<double>();
+            h[i] = he.norm();
+            along[i] = h[i] > 0 ? M_[i].cast<double>().dot(he) / h[i] : 0.0;
+        });
+        curve_.fit(h, along);
+    }
     HextSolved_ = Hext_;
     extSolved2_ = deterministicSum(n, [&](size_t i) { return double(Hext_[i].squaredNorm()); });
     inducedScale_ = 1;
@@ -249,6 +260,22 @@ void FluidMagnetics::computeKelvin(const std::vector<Vec3>& x, const std::vector
 void FluidMagnetics::computeBodyForce(const std::vector<Vec3>& x) {
     // mu0 (J_magnets M) / rho0 per unit mass (see the header).
     const Real scale = Real(kMu0 / rho0_);
+    if (traction_ && curve_.fitted()) {
+        // Self-consistent solve: mu0 M_f(h) grad h / rho0, h = |H_magnets|, grad h =
+        // J_magnets H_magnets / h (J is symmetric: the magnets' field is curl-free in the
+        // fluid). A gradient, unlike J M_i with each particle's own M_i (see the header).
+        forEachParticle(x.size(), [&](size_t i) {
+            const Vec3d he = Hext_[i].cast<double>();
+            const double h = he.norm();
+            if (!(h > 0)) {
+                kelvin_[i] = Vec3::Zero();
+                return;
+            }
+            const Vec3d gradH = fieldGradient(magnets_, x[i].cast<double>()) * (he / h);
+            kelvin_[i] = (kMu0 / rho0_ * curve_.magnetization(h) * gradH).cast<Real>();
+        });
+        return;
+    }
     forEachParticle(x.size(), [&](size_t i) {
         const Eigen::Matrix3f J = fieldGradient(magnets_, x[i].cast<double>()).cast<Real>();
         kelvin_[i] = scale * (J * M_[i]);

@@ -20,8 +20,15 @@
 //   density, whose deficit at the free surface would inflate the force there. With the
 //   `external` solver this is exactly mu0 grad F(H_magnets) / rho0, F(H) = integral_0^H M dH'
 //   (langevinEnergy), and a pool at rest obeys rho g dz_s = mu0 dF along its surface
-//   (tests/sim/sph: within 5 % of the centre rise, DFSPH and WCSPH). It leaves out the
-//   magnetic normal traction mu0 M_n^2 / 2 of the particles' own field at the surface.
+//   (tests/sim/sph: within 5 % of the centre rise, DFSPH and WCSPH). With a self-consistent
+//   solver M in the force is the solve's DemagnetizationCurve, M_f(|H_magnets|): the
+//   demagnetized M as a function of the applied field's strength, so the force stays the
+//   gradient mu0 grad G(|H_magnets|) / rho0 and a pool can rest (each particle's own M made
+//   it a curl force that stirred the pool forever: DemagnetizationCurve.hpp). The layer's
+//   demagnetization it carries is what makes the heap obey the ferrohydrostatic Bernoulli
+//   law rho g z_s = mu0 (F(H) + M_n^2 / 2) + C with the surface's own H and M_n
+//   (tests/sim/app/test_ferrohydrostatics.cpp): for a layer magnetized across it,
+//   M_law(H_in) grad|H_magnets| integrates to exactly that law.
 // - magnetization.force = "surface" (experimental): the Kelvin force density of the TOTAL
 //   field, mu0 (M . grad) H, is for M parallel to H and curl H = 0 exactly grad(mu0 F(H))
 //   (Rosensweig, Ferrohydrodynamics, ch. 5); across the free surface the same density,
@@ -49,6 +56,7 @@
 //   that is fixed it stays off by default.
 // - A scene without magnets constructs nothing and costs nothing; magnets with a
 //   non-magnetic fluid (susceptibility 0) only report the applied field.
+#include "sim/magnetics/DemagnetizationCurve.hpp"
 #include "sim/magnetics/MagnetField.hpp"
 #include "sim/sph/NeighborSearch.hpp"
 #include "sim/scene/SimParams.hpp"
@@ -116,6 +124,8 @@ public:
     size_t unconvergedInRow() const { return unconvergedInRow_; }
     /// Kelvin accelerations of the last update, current order.
     const std::vector<Vec3>& kelvinAcceleration() const { return kelvin_; }
+    /// The magnetization the body force uses (fitted at the last self-consistent solve).
+    const DemagnetizationCurve& demagnetizationCurve() const { return curve_; }
 
     /// Reorders the cached per-particle state with the simulation's particles.
     void permute(const std::vector<uint32_t>& order);
@@ -161,6 +171,7 @@ private:
     size_t unconvergedInRow_ = 0;
     double flatGradient_ = 0, layerFactor_ = 1;  // surface model: |grad c| of a flat lattice surface, kappa
     bool traction_ = true;                   // the last solve had the particles' own field
+    DemagnetizationCurve curve_;             // M along H_magnets against |H_magnets|, fitted at each solve
     std::vector<Vec3> HextSolved_;           // applied field at the last solve, current order
     static constexpr size_t kMaxInterval = 200;
     size_t interval_ = 1;                    // steps a solve may serve (measured, see solve())

@@ -15,6 +15,7 @@
 #include <algorithm>
 #include <cmath>
 #include <filesystem>
+#include <map>
 #include <sys/wait.h>
 #include <unistd.h>
 
@@ -99,6 +100,72 @@ SurfaceBalance surfaceBalance(const FluidSimulation& sim, const Vec2d& from, con
     double work = 0;   // trapezoid rule along the sampled surface
     for (size_t k = 1; k < point.size(); ++k) work += 0.5 * (force[k] + force[k - 1]).dot(point[k] - point[k - 1]);
     out.predicted = work / g;
+    return out;
+}
+
+/// The ferrohydrostatic Bernoulli law along a pool's free surface (Rosensweig,
+/// Ferrohydrodynamics, ch. 5): rho g z_s - mu0 (F(H) + M_n^2 / 2) is the same everywhere on
+/// it, H and M the field and magnetization just inside the surface, M_n = M . n. Both sides
+/// from the simulation's own particles: the surface is located by column tops (rings one
+/// spacing wide around the dish axis, each cut into sectors about one spacing long; a
+/// sector's highest particle is its top), z_s, H and M_n are ring means over the tops, the
+/// normal n comes from the ring profile's slope. Rings from the axis to 2.5 spacings inside
+/// the wall (`wallRadius`, clear of the meniscus).
+struct BernoulliCheck {
+    double rise = 0;         ///< rho g (z_s(axis) - z_s(outermost ring)) [Pa]
+    double worst = 0;        ///< largest |residual - mean residual| over the rings [Pa]
+    double traction = 0;     ///< mu0 M_n^2 / 2 on the axis [Pa]
+    double pressure = 0;     ///< mu0 F(H) on the axis [Pa]
+};
+BernoulliCheck bernoulliCheck(const FluidSimulation& sim, double wallRadius) {
+    const double s = sim.spacing(), rho0 = sim.restDensity(), g = sim.scene().solver.gravity.norm();
+    const double chi0 = sim.scene().magnetization.susceptibility, Msat = sim.scene().magnetization.saturation;
+    const std::vector<Vec3>& x = sim.positions();
+    const std::vector<Vec3>& H = sim.magnetics()->field();
+    const std::vector<Vec3>& M = sim.magnetics()->magnetization();
+    const int rings = int((wallRadius - 2.5 * s) / s);
+    REQUIRE(rings >= 4);
+    std::map<std::pair<int, int>, size_t> top;   // (ring, sector) -> highest particle
+    for (size_t i = 0; i < x.size(); ++i) {
+        const double r = std::hypot(double(x[i].x()), double(x[i].y()));
+        const int ring = int(r / s);
+        if (ring >= rings) continue;
+        const int sectors = std::max(1, int(2 * kPi * (ring + 0.5)));
+        const double angle = std::atan2(double(x[i].y()), double(x[i].x())) + kPi;
+        const std::pair<int, int> key(ring, std::min(sectors - 1, int(angle / (2 * kPi) * sectors)));
+        const auto it = top.find(key);
+        if (it == top.end() || x[i].z() > x[it->second].z()) top[key] = i;
+    }
+    std::vector<std::vector<size_t>> tops(static_cast<size_t>(rings));
+    for (const auto& [key, i] : top) tops[size_t(key.first)].push_back(i);
+    std::vector<double> zs(size_t(rings), 0.0);
+    for (int k = 0; k < rings; ++k) {
+        REQUIRE(!tops[size_t(k)].empty());
+        for (size_t i : tops[size_t(k)]) zs[size_t(k)] += double(x[i].z()) / double(tops[size_t(k)].size());
+    }
+    std::vector<double> residual;
+    BernoulliCheck out;
+    for (int k = 0; k < rings; ++k) {
+        const int lo = std::max(k - 1, 0), hi = std::min(k + 1, rings - 1);
+        const double slope = (zs[size_t(hi)] - zs[size_t(lo)]) / (double(hi - lo) * s);
+        double h = 0, mn = 0;
+        for (size_t i : tops[size_t(k)]) {
+            const Vec2d radial = Vec2d(x[i].x(), x[i].y()).normalized();
+            const Vec3d n = Vec3d(-slope * radial.x(), -slope * radial.y(), 1).normalized();
+            h += H[i].cast<double>().norm() / double(tops[size_t(k)].size());
+            mn += M[i].cast<double>().dot(n) / double(tops[size_t(k)].size());
+        }
+        const double pressure = kMu0 * langevinEnergy(h, chi0, Msat), traction = kMu0 * 0.5 * mn * mn;
+        if (k == 0) {
+            out.pressure = pressure;
+            out.traction = traction;
+        }
+        residual.push_back(rho0 * g * zs[size_t(k)] - pressure - traction);
+    }
+    double mean = 0;
+    for (double r : residual) mean += r / double(residual.size());
+    for (double r : residual) out.worst = std::max(out.worst, std::abs(r - mean));
+    out.rise = rho0 * g * (zs.front() - zs.back());
     return out;
 }
 
@@ -467,7 +534,8 @@ TEST_CASE("a pool over a magnet held still comes to rest in ferrohydrostatic bal
         std::string solver, magnetization;
         double susceptibility;
     };
-    const Case c = GENERATE(Case{"dfsph", "external", 1.5}, Case{"wcsph", "external", 1.5}, Case{"dfsph", "auto", 0.5});
+    const Case c = GENERATE(Case{"dfsph", "external", 1.5}, Case{"wcsph", "external", 1.5}, Case{"dfsph", "auto", 0.5},
+                            Case{"dfsph", "auto", 1.5}, Case{"wcsph", "auto", 1.5});
     const std::string text = R"(
 [fluid]
 rest_density = 1200.0
@@ -509,16 +577,25 @@ solver = ")" + c.magnetization + R"("
     // From 4 mm inside the wall (clear of the meniscus) to the centre.
     const SurfaceBalance heap = surfaceBalance(sim, Vec2d(0.021, 0), Vec2d(0, 0));
     CAPTURE(c.solver, c.magnetization, c.susceptibility, rms, sim.spacing(), heap.rise, heap.predicted);
-    REQUIRE(heap.predicted > sim.spacing());
+    REQUIRE(rms < 0.001);
     if (c.magnetization == "external") {
-        REQUIRE(rms < 0.001);
+        REQUIRE(heap.predicted > sim.spacing());
         REQUIRE(std::abs(heap.rise - heap.predicted) < 0.1 * heap.predicted);
     } else {
-        // NOT the target yet (issue 13): with the particles' own field in M the body force
-        // mu0 J_magnets M_i(x_1 .. x_N) is no longer the gradient of anything, and the pool
-        // keeps 2.7 mm/s RMS (3.6 mm/s with point dipoles; 23 mm/s before the DFSPH fix),
-        // its heap 14 % above the balance. Guarded here so it cannot get worse unseen.
-        REQUIRE(rms < 0.004);
-        REQUIRE(std::abs(heap.rise - heap.predicted) < 0.3 * heap.predicted);
+        // The self-consistent solve: the heap against the ferrohydrostatic Bernoulli law with
+        // the particles' own H and M at the surface (the traction term mu0 M_n^2 / 2 included).
+        // Before the body force's M became a function of |H_magnets| (DemagnetizationCurve),
+        // this pool never rested (2.7 mm/s RMS, a convection roll) and a smaller pool's surface
+        // was off the law by 40-70 % of the centre rise. Measured now (this pool, 2 s): worst
+        // deviation 15 % (chi0 0.5), 22 % (1.5, DFSPH), 24 % (1.5, WCSPH), a smooth trend from
+        // the axis outward: the force's potential is the law exactly only where the field
+        // crosses the layer normally, and the field here turns oblique toward the wall.
+        // The issue's 10 % is not reached.
+        const BernoulliCheck law = bernoulliCheck(sim, 0.025);
+        WARN("Bernoulli along the surface (" << c.solver << ", chi0 " << c.susceptibility << "): centre rise "
+             << law.rise << " Pa, worst deviation " << law.worst << " Pa; on the axis mu0 F = " << law.pressure
+             << " Pa, mu0 Mn^2/2 = " << law.traction << " Pa; RMS speed " << 1e3 * rms << " mm/s");
+        REQUIRE(law.traction > 0.2 * law.pressure);   // the traction term matters here
+        REQUIRE(law.worst < 0.3 * law.rise);
     }
 }
