@@ -30,22 +30,24 @@ bench_need() {
   for e in "$@"; do [[ -x "$bin/$e" ]] || bench_die 4 "$bin/$e is missing (run scripts/build.sh)"; done
 }
 
-# bench_time VAR CMD...: runs CMD (stdout and stderr to $work/last.log), stores its wall seconds
-# in VAR; a failing CMD stops the script with its log tail (exit 3).
+# bench_time VAR CMD...: runs CMD (stdout and stderr to $work/last.log) and stores its CPU
+# seconds (user + system, all threads) in VAR and its wall seconds in VAR_wall. CPU seconds are
+# the cost the reports use: the machine is shared, so wall time measures the neighbours too.
+# A failing CMD stops the script with its log tail (exit 3).
 bench_time() {
   local var="$1"; shift
-  local t0 t1
-  t0="$(date +%s.%N)"
-  "$@" > "$work/last.log" 2>&1 || { tail -n 5 "$work/last.log" >&2; bench_die 3 "failed: $*"; }
-  t1="$(date +%s.%N)"
-  printf -v "$var" '%s' "$(awk -v a="$t0" -v b="$t1" 'BEGIN { printf "%.3f", b - a }')"
+  local TIMEFORMAT='%R %U %S' times rc=0
+  times="$( { time "$@" > "$work/last.log" 2>&1; } 2>&1 )" || rc=$?
+  [[ $rc == 0 ]] || { tail -n 5 "$work/last.log" >&2; bench_die 3 "failed: $*"; }
+  read -r wall user sys <<< "$times"
+  printf -v "$var" '%s' "$(calc "$user + $sys")"
+  printf -v "${var}_wall" '%s' "$wall"
 }
 
-# bench_best VAR REPEATS CMD...: the shortest wall time of REPEATS runs (the machine is shared:
-# the minimum is the least disturbed run).
+# bench_best VAR REPEATS CMD...: the least CPU seconds of REPEATS runs.
 bench_best() {
   local var="$1" n="$2"; shift 2
-  local best="" t i
+  local best="" t t_wall i
   for ((i = 0; i < n; ++i)); do
     bench_time t "$@"
     best="$(awk -v a="$best" -v b="$t" 'BEGIN { print (a == "" || b < a) ? b : a }')"
@@ -72,10 +74,10 @@ bench_settled_frame() {
     bench_need ferro-sim
     bench_note "simulating the settled frame of $(basename "$scene") $* (cached in $dir)"
     rm -rf "$dir.tmp"
-    local t
+    local t t_wall
     bench_time t nice -n 5 "$bin/ferro-sim" "$scene" --out "$dir.tmp" --max-frames 0 "$@"
     cp "$work/last.log" "$dir.tmp/ferro-sim.log"
-    echo "$t" > "$dir.tmp/wall_seconds"
+    echo "cpu $t wall $t_wall" > "$dir.tmp/seconds"
     rm -rf "$dir"; mv "$dir.tmp" "$dir"
   fi
   printf -v "$var" '%s' "$dir/particles_0000.ply"

@@ -34,7 +34,7 @@ repeats=1 spiky reference "$ref_res" "$ref_it"
 ref_seconds="$seconds"
 tips="$(sed -n 's/^ferro-spikes: \([0-9]*\) tips.*/\1/p' "$work/last.log")"
 ref_label="resolution $ref_res iterations $ref_it"
-header="setting,resolution,remesh_iterations,seconds,triangles,tip_mean_distance_m,tip_max_distance_m,tip_height_m,tip_height_error_m,mean_distance_m,reference"
+header="setting,resolution,remesh_iterations,cpu_seconds,triangles,tip_mean_distance_m,tip_max_distance_m,tip_height_m,tip_height_error_m,mean_distance_m,reference"
 row() { # SETTING RES IT: $work/current.ply against the reference
   local line; line="$("$bin/bench-compare-mesh" "$work/current.ply" "$work/reference.ply" --above "$top")"
   local ha hb; ha="$(calc "$(kv top_a_m "$line") - $top")" hb="$(calc "$(kv top_b_m "$line") - $top")"
@@ -47,13 +47,13 @@ reference_row() { cp "$work/reference.ply" "$work/current.ply"; seconds="$ref_se
   for r in $resolutions; do spiky current "$r" 3; row "resolution $r" "$r" 3; done
   reference_row
 } > "$out/spikes_resolution.csv"
-bench_plot "$out/spikes_resolution.csv" seconds tip_mean_distance_m spikes_resolution "ferro-spikes resolution (remesh_iterations 3): tip distance to the finest"
+bench_plot "$out/spikes_resolution.csv" cpu_seconds tip_mean_distance_m spikes_resolution "ferro-spikes resolution (remesh_iterations 3): tip distance to the finest"
 {
   echo "$header"
   for i in $iterations; do spiky current 16 "$i"; row "iterations $i" 16 "$i"; done
   reference_row
 } > "$out/spikes_remesh_iterations.csv"
-bench_plot "$out/spikes_remesh_iterations.csv" seconds tip_mean_distance_m spikes_remesh_iterations "ferro-spikes remesh_iterations (resolution 16): tip distance to the finest"
+bench_plot "$out/spikes_remesh_iterations.csv" cpu_seconds tip_mean_distance_m spikes_remesh_iterations "ferro-spikes remesh_iterations (resolution 16): tip distance to the finest"
 
 table() {
   awk -F, 'NR == 1 { h = "|"; s = "|"; for (i = 1; i < NF; ++i) { h = h " " $i " |"; s = s " --- |" }; print h; print s; next }
@@ -69,7 +69,7 @@ r1="$out/spikes_resolution.csv" i1="$out/spikes_remesh_iterations.csv"
   echo "setting; the reference is the finest setting ($ref_label, $ref_seconds s). Tip columns"
   echo "(\`bench-compare-mesh --above\`): distances between the two spiky meshes over the vertices above"
   echo "the unspiked surface's top ($top m), i.e. the spikes; tip height = tallest tip above that top."
-  echo "Seconds: best of $repeats wall-clock runs of ferro-spikes (read, spikes, remesh, write)."
+  echo "CPU seconds (user + system of all threads): the least of $repeats runs of ferro-spikes (read, spikes, remesh, write)."
   echo
   echo "Resolution (edges per tip spacing; remesh_iterations 3): ![](spikes_resolution.png)"
   echo

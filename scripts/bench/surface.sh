@@ -31,7 +31,7 @@ ref_seconds="$seconds"
 ref_label="anisotropic voxel=spacing/$(calc "1 / $ref_factor")"
 
 # row SETTING VOXEL: one CSV row of the mesh $work/current.ply against the reference.
-header="setting,voxel_m,seconds,triangles,mean_distance_m,max_distance_m,volume_m3,volume_error_pct,reference"
+header="setting,voxel_m,cpu_seconds,triangles,mean_distance_m,max_distance_m,volume_m3,volume_error_pct,reference"
 row() {
   local line; line="$("$bin/bench-compare-mesh" "$work/current.ply" "$work/reference.ply")"
   local va vb; va="$(kv volume_a_m3 "$line")" vb="$(kv volume_b_m3 "$line")"
@@ -49,7 +49,7 @@ row() {
   cp "$work/reference.ply" "$work/current.ply"; seconds="$ref_seconds"
   row "$ref_factor spacing (ref)" "$ref_voxel"
 } > "$out/surface_voxel.csv"
-bench_plot "$out/surface_voxel.csv" seconds mean_distance_m surface_voxel "ferro-surface anisotropic: voxel size (setting = voxel edge in particle spacings)"
+bench_plot "$out/surface_voxel.csv" cpu_seconds mean_distance_m surface_voxel "ferro-surface anisotropic: voxel size (setting = voxel edge in particle spacings)"
 
 default_voxel="$(calc "$spacing * 0.5")"
 {
@@ -59,7 +59,7 @@ default_voxel="$(calc "$spacing * 0.5")"
     row "$m" "$default_voxel"
   done
 } > "$out/surface_method.csv"
-bench_plot "$out/surface_method.csv" seconds mean_distance_m surface_method "ferro-surface method at voxel = spacing/2"
+bench_plot "$out/surface_method.csv" cpu_seconds mean_distance_m surface_method "ferro-surface method at voxel = spacing/2"
 
 # OpenVDB's own particle surfacer beside ferro-surface's methods (bench-surface, 40,960 particles).
 peer_note="bench-surface is not built: OpenVDB comparison skipped"
@@ -91,7 +91,7 @@ v1="$out/surface_voxel.csv" m1="$out/surface_method.csv"
   echo "by ferro-surface at several settings; each mesh is compared with a reference mesh of the"
   echo "same frame ($ref_label, $ref_seconds s) by \`bench-compare-mesh\`: distance from every vertex of"
   echo "each mesh to the other's triangles (mean over both, max of both), enclosed volumes."
-  echo "Seconds: best of $repeats wall-clock runs of ferro-surface (read, mesh, write; 2 threads, shared machine)."
+  echo "CPU seconds (user + system of all threads): the least of $repeats runs of ferro-surface (read, mesh, write)."
   echo
   echo "Voxel size (anisotropic; setting = voxel edge in particle spacings): ![](surface_voxel.png)"
   echo
