@@ -10,6 +10,7 @@
 # committed) and reused while their inputs are unchanged.
 #   --only AREAS   run only these areas (the other sections already in OUT_DIR are kept)
 #   --no-build     skip scripts/build.sh (use FERRO_BIN or build/bin as they are)
+#   --assemble     run no area: only rewrite OUT_DIR/README.md from the sections in OUT_DIR
 # Areas, in order: sim magnetics surface spikes render scene-cost peer (scripts/bench/<area>.sh;
 # peer needs FERRO_PEER_SRC=/path/to/SPlisHSPlasH and otherwise prints why it is skipped).
 # Environment: BENCH_QUICK=1 (tiny sizes: checks the scripts in minutes, not for the report),
@@ -20,25 +21,28 @@ root="$(cd "$(dirname "$0")/.." && pwd)"
 die() { echo "bench.sh: error: $2" >&2; exit "$1"; }
 all_areas=(sim magnetics surface spikes render scene-cost peer)
 
-out="" only="" build=1
+out="" only="" build=1 assemble=0
 while [[ $# -gt 0 ]]; do
   case "$1" in
     --only) only="${2:?--only needs AREA[,AREA...]}"; shift 2 ;;
     --no-build) build=0; shift ;;
-    -h|--help) sed -n '2,21s/^# \{0,1\}//p' "$0"; exit 0 ;;
+    --assemble) build=0; assemble=1; shift ;;
+    -h|--help) sed -n '2,22s/^# \{0,1\}//p' "$0"; exit 0 ;;
     -*) die 2 "unknown option $1 (see --help)" ;;
     *) [[ -z "$out" ]] || die 2 "unexpected argument $1"; out="$1"; shift ;;
   esac
 done
 out="${out:-$root/tests/bench/report}"
 areas=("${all_areas[@]}")
-if [[ -n "$only" ]]; then
+if [[ $assemble == 1 ]]; then
+  areas=()
+elif [[ -n "$only" ]]; then
   IFS=, read -r -a areas <<< "$only"
   for a in "${areas[@]}"; do
     [[ " ${all_areas[*]} " == *" $a "* ]] || die 2 "--only: no area '$a' (areas: ${all_areas[*]})"
   done
 fi
-command -v gnuplot > /dev/null || die 4 "gnuplot is not installed (scripts/install-deps.sh --with-bench)"
+[[ $assemble == 1 ]] || command -v gnuplot > /dev/null || die 4 "gnuplot is not installed (scripts/install-deps.sh --with-bench)"
 mkdir -p "$out/cache" || die 4 "$out: cannot create the output directory"
 out="$(cd "$out" && pwd)"
 
@@ -49,7 +53,7 @@ fi
 
 start=$SECONDS failed=()
 declare -A took
-for a in "${areas[@]}"; do
+for a in "${areas[@]+"${areas[@]}"}"; do
   script="$root/scripts/bench/$a.sh"
   if [[ ! -x "$script" ]]; then
     echo "bench.sh: $a: scripts/bench/$a.sh is not there: skipped" >&2

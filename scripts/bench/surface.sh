@@ -67,8 +67,9 @@ echo "method,seconds,ratio_to_openvdb,reference" > "$out/surface_openvdb.csv"
 if [[ -x "$bin/bench-surface" && $quick != 1 ]]; then
   "$bin/bench-surface" --small-only --threads 2 > "$work/bench-surface.txt"
   awk '$1 ~ /^[0-9]+$/ {
-         if ($2 == "OpenVDB") { name = "OpenVDB ParticlesToLevelSet+volumeToMesh"; t = $3; ref = t }
-         else { name = $2 " " $3; t = $4 }
+         # "40960  OpenVDB ParticlesToLevelSet+v2m  0.123 ..." / "40960  ferro-surface anisotropic  0.456 ..."
+         t = $4
+         if ($2 == "OpenVDB") { name = "OpenVDB ParticlesToLevelSet+volumeToMesh"; ref = t } else name = $2 " " $3
          printf "%s,%s,%.2f,OpenVDB ParticlesToLevelSet+volumeToMesh\n", name, t, t / ref }' \
     "$work/bench-surface.txt" >> "$out/surface_openvdb.csv"
   peer_note="$(head -n 1 "$work/bench-surface.txt")"
@@ -114,9 +115,9 @@ v1="$out/surface_voxel.csv" m1="$out/surface_method.csv"
   echo "- Method at spacing/2: anisotropic $(col "$m1" anisotropic 5) m mean in $(col "$m1" anisotropic 3) s, isotropic"
   echo "  $(col "$m1" isotropic 5) m in $(col "$m1" isotropic 3) s, openvdb $(col "$m1" openvdb 5) m in $(col "$m1" openvdb 3) s."
   echo
-  echo "Recommended: preview \`surface.voxel_size\` = spacing (\`surface.voxel_size = 0\` is spacing/2; the"
-  echo "preset gives the factor), final spacing/2 (default), large shot spacing/2 (the time grows as the"
-  echo "surface area over voxel², so a large shot keeps the default and buys speed elsewhere); method anisotropic"
-  echo "throughout (the only one that keeps a resting pool flat)."
+  echo "Recommended, all presets: \`surface.method = anisotropic\`, \`surface.voxel_size = 0\` (spacing/2, the"
+  echo "defaults). The surface is the cheapest stage per frame (compare spikes.md and render.md), so a"
+  echo "preview gains little from a coarser voxel and would pay in volume; finer than spacing/2 costs"
+  echo "about 2-4x per halving for an error already a small fraction of the spacing."
 } > "$out/surface.md"
 bench_note "wrote $out/surface.md, surface_voxel.csv/.png, surface_method.csv/.png, surface_openvdb.csv"
