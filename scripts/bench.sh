@@ -67,6 +67,49 @@ for a in "${areas[@]+"${areas[@]}"}"; do
 done
 
 # ---- OUT_DIR/README.md ----
+# val CSV SETTING COLUMN: one cell of an area's CSV (empty when the area did not run).
+val() {
+  [[ -f "$out/$1" ]] || return 0
+  awk -F, -v s="$2" -v c="$3" 'NR == 1 { for (i = 1; i <= NF; ++i) if ($i == c) k = i; next } $1 == s && k { print $k }' "$out/$1"
+}
+num() { awk -v x="$1" 'BEGIN { if (x == "") print "?"; else printf "%.2g", x }'; }
+# The guide, with the figures of this run's CSVs (CPU seconds per frame of the report's frame).
+guide() {
+  local aa_def aa_off aa_r2 rm_def rm_off rm_r2 sp_final sp_prev sp_large tp_final tp_prev tp_large sf
+  aa_def="$(val render_antialias.csv +A0.3+R3 cpu_seconds)" rm_def="$(val render_antialias.csv +A0.3+R3 rmse)"
+  aa_off="$(val render_antialias.csv -A cpu_seconds)" rm_off="$(val render_antialias.csv -A rmse)"
+  aa_r2="$(val render_antialias.csv +A0.3+R2 cpu_seconds)" rm_r2="$(val render_antialias.csv +A0.3+R2 rmse)"
+  sp_final="$(val spikes_presets.csv "final (16 / 3)" cpu_seconds)" tp_final="$(val spikes_presets.csv "final (16 / 3)" tip_mean_distance_m)"
+  sp_prev="$(val spikes_presets.csv "preview (8 / 1)" cpu_seconds)" tp_prev="$(val spikes_presets.csv "preview (8 / 1)" tip_mean_distance_m)"
+  sp_large="$(val spikes_presets.csv "large (12 / 1)" cpu_seconds)" tp_large="$(val spikes_presets.csv "large (12 / 1)" tip_mean_distance_m)"
+  sf="$(val surface_voxel.csv "0.5 spacing" cpu_seconds)"
+  local x16 x4
+  x16="$(awk -v a="$aa_def" 'BEGIN { if (a == "") print ""; else print 16 * a }')"
+  x4="$(awk -v a="$aa_off" 'BEGIN { if (a == "") print ""; else print 4 * a }')"
+  cat <<GUIDE
+## The guide: which settings for what
+
+Where a frame's time goes, at the report's frame (10,240 particles; CPU seconds): the surface
+$(num "$sf") s, the spikes $(num "$sp_final") s at the defaults, the render about $(num "$x16") s at 640x480 with the
+defaults ($(num "$aa_def") s measured at 160x120, times 16 pixels). The render dominates; the simulation's
+cost per frame is in the sim section (and its presets keys are still placeholders, see below).
+
+- **Preview** (motion, framing, timing): \`scripts/shot.sh SCENE OUT --preset preview\`. 320x240,
+  +Q8, no anti-aliasing: about $(num "$x4") CPU s a frame ($(num "$aa_off") s at 160x120, times 4), image RMSE
+  $(num "$rm_off") against the reference instead of $(num "$rm_def") (jagged edges, same reflections: +Q8 renders
+  this look exactly as +Q9 does, +Q5 loses the reflections); spikes at resolution 8 with one
+  remeshing round, $(num "$sp_prev") s, tips $(num "$tp_prev") m from the finest mesh.
+- **Final frames**: \`--preset final\`, the stages' defaults: 640x480, +Q9 +A0.3 +R3, spikes 16 / 3
+  rounds (tips $(num "$tp_final") m from the finest), surface anisotropic at spacing/2.
+- **A very large shot** (many frames or particles): \`--preset large\`: the final image with
+  anti-aliasing depth 2 ($(num "$aa_r2") s instead of $(num "$aa_def") s at 160x120, RMSE $(num "$rm_r2") instead of
+  $(num "$rm_def")) and spikes at resolution 12 with one round ($(num "$sp_large") s instead of $(num "$sp_final") s, tips
+  $(num "$tp_large") m from the finest: a tenth of a pixel at 640x480).
+
+Any key can still be overridden: \`scripts/shot.sh SCENE OUT --preset preview --set render.width=480\`.
+
+GUIDE
+}
 presets="$root/scripts/presets.conf"
 {
   cat <<'INTRO'
@@ -80,20 +123,10 @@ or ratios: the machine is shared, so wall times would measure the neighbours too
 is `scripts/bench/<area>.sh OUT_DIR`; each knob has a CSV (one row per setting) and a plot
 of cost (log scale) against error (`scripts/bench/plot.sh`).
 
-## The guide: which settings for what
-
-- **Preview** (checking motion, framing, timing): `scripts/shot.sh SCENE OUT --preset preview`.
-  The render dominates a frame's cost; a small image without anti-aliasing and coarser
-  spikes cut it most. Errors in the sections below say what a preview frame misses.
-- **Final frames**: `--preset final` (the defaults of every stage, which the report
-  supports: each sits where the error curve flattens).
-- **A very large shot** (many frames or particles): `--preset large`: the final look with
-  the cheaper settings whose error the report shows to be invisible at frame size.
-
-Any preset key can still be overridden: `scripts/shot.sh SCENE OUT --preset preview --set render.width=480`.
-
-## Presets
 INTRO
+
+  guide
+  echo "## Presets"
   echo
   if [[ -f "$presets" ]]; then
     echo "From \`scripts/presets.conf\` (what \`scripts/shot.sh --preset NAME\` passes to the stages as"

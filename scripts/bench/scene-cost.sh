@@ -114,6 +114,8 @@ visc_header="${sim_log[no_magnets]}"
 if grep -q "viscosity" <<< "$visc_header"; then visc_auto=yes; else visc_auto=no; fi
 echo "auto,fluid.viscosity_method auto (explicit chosen for this fluid),,,,$visc_auto,ferro-sim header line" >> "$csv"
 
+r3() { printf '%.3g' "$1"; }
+
 # ---- the Markdown section -------------------------------------------------------------------------
 {
   echo "## Model only what a scene requires"
@@ -126,15 +128,16 @@ echo "auto,fluid.viscosity_method auto (explicit chosen for this fluid),,,,$visc
   echo
   echo "Findings:"
   echo
-  echo "- No magnets: $(calc "${sim_ms[no_magnets]}") CPU ms per step, and no magnetics in the log (\`${sim_log[no_magnets]#ferro-sim: }\`);"
-  echo "  a magnet with a non-magnetic fluid $(calc "${sim_ms[magnet_not_magnetic]}") ms, a magnet with the magnetic fluid"
-  echo "  $(calc "${sim_ms[magnet_magnetic]}") ms per step ($(calc "${sim_ms[magnet_magnetic]} / ${sim_ms[no_magnets]}")x)."
+  echo "- No magnets: $(r3 "${sim_ms[no_magnets]}") CPU ms per step, and no magnetics in the log (\`${sim_log[no_magnets]#ferro-sim: }\`);"
+  echo "  a magnet with a non-magnetic fluid $(r3 "${sim_ms[magnet_not_magnetic]}") ms, a magnet with the magnetic fluid"
+  echo "  $(r3 "${sim_ms[magnet_magnetic]}") ms per step ($(r3 "$(calc "${sim_ms[magnet_magnetic]} / ${sim_ms[no_magnets]}")")x; the particles' field re-solved every 10th step)."
   echo "- Subcritical fluid: ferro-spikes takes ${spike_cpu[subcritical]} CPU s and returns the surface unchanged"
   echo "  (\`${spike_line[subcritical]}\`); a supercritical frame ${spike_cpu[supercritical]} CPU s; spikes disabled (a copy) ${spike_cpu[disabled]} CPU s."
   echo "- Still frames: $first_runs of 3 identical frames were meshed (surface and spikes: $first_cpu CPU s for"
   echo "  the three); a second make rebuilt $second_runs. $([[ $still == no ]] && echo "Frames where nothing moved are NOT skipped: make
-  rebuilds from file times, and every frame the simulation writes is new to it (not fixed here: it needs a
-  'nothing moved' test on the particles, see the report's open items).")"
+  works from file times, and every frame the simulation writes is a new file to it. Open: it needs a
+  'nothing moved' test (particles and magnets of frame N against N-1 within a tolerance) that reuses
+  frame N-1's meshes; not done here.")"
   echo "- \`auto\`: magnetization.solver prints its choice on every frame line ($(sed 's/.*M solves/M solves/; s/ ETA.*//' <<< "$mag_frame"));"
   echo "  fluid.viscosity_method $([[ $visc_auto == yes ]] && echo "names the method in the header line" || echo "says only when it chose implicit (the header line names nothing when it chose explicit)")."
 } > "$out/scene-cost.md"

@@ -10,7 +10,8 @@
 # remesh_iterations 5. Tip shape (bench-compare-mesh --above Z, Z = the top of the unspiked
 # surface): mean and max distance between the two spiky meshes over the vertices above Z (the
 # spikes), and the tallest tip's height.
-# Writes spikes_resolution.csv/.png, spikes_remesh_iterations.csv/.png, spikes.md.
+# Writes spikes_resolution.csv/.png, spikes_remesh_iterations.csv/.png, spikes_presets.csv/.png
+# (the settings of scripts/presets.conf), spikes.md.
 set -euo pipefail
 source "$(dirname "$0")/common.sh"
 bench_init spikes "$@"
@@ -55,6 +56,18 @@ bench_plot "$out/spikes_resolution.csv" cpu_seconds tip_mean_distance_m spikes_r
 } > "$out/spikes_remesh_iterations.csv"
 bench_plot "$out/spikes_remesh_iterations.csv" cpu_seconds tip_mean_distance_m spikes_remesh_iterations "ferro-spikes remesh_iterations (resolution 16): tip distance to the finest"
 
+# The presets' settings (scripts/presets.conf) measured as they are used.
+{
+  echo "$header"
+  for p in "preview 8 1" "final 16 3" "large 12 1"; do
+    read -r name r i <<< "$p"
+    [[ $quick == 1 && $name != final ]] && continue
+    spiky current "$r" "$i"; row "$name ($r / $i)" "$r" "$i"
+  done
+  reference_row
+} > "$out/spikes_presets.csv"
+bench_plot "$out/spikes_presets.csv" cpu_seconds tip_mean_distance_m spikes_presets "ferro-spikes at the presets' resolution / remesh_iterations"
+
 table() {
   awk -F, 'NR == 1 { h = "|"; s = "|"; for (i = 1; i < NF; ++i) { h = h " " $i " |"; s = s " --- |" }; print h; print s; next }
            { r = "|"; for (i = 1; i < NF; ++i) r = r " " $i " |"; print r }' "$1"
@@ -78,6 +91,10 @@ r1="$out/spikes_resolution.csv" i1="$out/spikes_remesh_iterations.csv"
   echo "Remeshing rounds (resolution 16): ![](spikes_remesh_iterations.png)"
   echo
   table "$i1"
+  echo
+  echo "The presets' settings (resolution / rounds): ![](spikes_presets.png)"
+  echo
+  table "$out/spikes_presets.csv"
   echo
   echo "Findings:"
   echo
