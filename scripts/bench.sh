@@ -73,6 +73,7 @@ val() {
   awk -F, -v s="$2" -v c="$3" 'NR == 1 { for (i = 1; i <= NF; ++i) if ($i == c) k = i; next } $1 == s && k { print $k }' "$out/$1"
 }
 num() { awk -v x="$1" 'BEGIN { if (x == "") print "?"; else printf "%.2g", x }'; }
+mm() { awk -v x="$1" 'BEGIN { if (x == "") print "?"; else printf "%.2g mm", 1000 * x }'; }
 # The guide, with the figures of this run's CSVs (CPU seconds per frame of the report's frame).
 guide() {
   local aa_def aa_off aa_r2 rm_def rm_off rm_r2 sp_final sp_prev sp_large tp_final tp_prev tp_large sf
@@ -98,13 +99,13 @@ cost per frame is in the sim section (and its presets keys are still placeholder
   +Q8, no anti-aliasing: about $(num "$x4") CPU s a frame ($(num "$aa_off") s at 160x120, times 4), image RMSE
   $(num "$rm_off") against the reference instead of $(num "$rm_def") (jagged edges, same reflections: +Q8 renders
   this look exactly as +Q9 does, +Q5 loses the reflections); spikes at resolution 8 with one
-  remeshing round, $(num "$sp_prev") s, tips $(num "$tp_prev") m from the finest mesh.
+  remeshing round, $(num "$sp_prev") s, tips $(mm "$tp_prev") from the finest mesh.
 - **Final frames**: \`--preset final\`, the stages' defaults: 640x480, +Q9 +A0.3 +R3, spikes 16 / 3
-  rounds (tips $(num "$tp_final") m from the finest), surface anisotropic at spacing/2.
+  rounds (tips $(mm "$tp_final") from the finest), surface anisotropic at spacing/2.
 - **A very large shot** (many frames or particles): \`--preset large\`: the final image with
   anti-aliasing depth 2 ($(num "$aa_r2") s instead of $(num "$aa_def") s at 160x120, RMSE $(num "$rm_r2") instead of
   $(num "$rm_def")) and spikes at resolution 12 with one round ($(num "$sp_large") s instead of $(num "$sp_final") s, tips
-  $(num "$tp_large") m from the finest: a tenth of a pixel at 640x480).
+  $(mm "$tp_large") from the finest: a tenth of a pixel at 640x480).
 
 Any key can still be overridden: \`scripts/shot.sh SCENE OUT --preset preview --set render.width=480\`.
 

@@ -81,6 +81,7 @@ header="setting,options,cpu_seconds,rmse,reference"
 bench_plot "$out/render_quality.csv" cpu_seconds rmse render_quality "POV-Ray quality (+Q): image RMSE vs +Q11 +A0.02 +R4, ${width}x${height}"
 bench_plot "$out/render_antialias.csv" cpu_seconds rmse render_antialias "POV-Ray anti-aliasing at +Q9: image RMSE vs +Q11 +A0.02 +R4, ${width}x${height}"
 
+r3() { awk -v x="$1" 'BEGIN { if (x == "") print "?"; else printf "%.3g", x }'; }
 table() {
   awk -F, 'NR == 1 { h = "|"; s = "|"; for (i = 1; i < NF; ++i) { h = h " " $i " |"; s = s " --- |" }; print h; print s; next }
            { r = "|"; for (i = 1; i < NF; ++i) r = r " " $i " |"; print r }' "$1"
@@ -106,12 +107,12 @@ q1="$out/render_quality.csv" a1="$out/render_antialias.csv"
   echo
   echo "Findings:"
   echo
-  echo "- The default (+Q9 +A0.3 +R3): RMSE $(col "$a1" "+A0.3+R3" 4) in $(col "$a1" "+A0.3+R3" 3) CPU s; without anti-aliasing"
-  echo "  $(col "$a1" "-A" 4) in $(col "$a1" "-A" 3) CPU s; +A0.1 +R3: $(col "$a1" "+A0.1+R3" 4) in $(col "$a1" "+A0.1+R3" 3) CPU s."
-  echo "- Quality below 8 drops the reflections the black fluid is seen by: +Q5 RMSE $(col "$q1" Q5 4)"
-  echo "  ($(col "$q1" Q5 3) CPU s) against +Q8 $(col "$q1" Q8 4) ($(col "$q1" Q8 3) CPU s) and +Q9 $(col "$q1" Q9 4) ($(col "$q1" Q9 3) CPU s):"
+  echo "- The default (+Q9 +A0.3 +R3): RMSE $(r3 "$(col "$a1" "+A0.3+R3" 4)") in $(r3 "$(col "$a1" "+A0.3+R3" 3)") CPU s; without anti-aliasing"
+  echo "  $(r3 "$(col "$a1" "-A" 4)") in $(r3 "$(col "$a1" "-A" 3)") CPU s; +A0.1 +R3: $(r3 "$(col "$a1" "+A0.1+R3" 4)") in $(r3 "$(col "$a1" "+A0.1+R3" 3)") CPU s."
+  echo "- Quality below 8 drops the reflections the black fluid is seen by: +Q5 RMSE $(r3 "$(col "$q1" Q5 4)")"
+  echo "  ($(r3 "$(col "$q1" Q5 3)") CPU s) against +Q8 $(r3 "$(col "$q1" Q8 4)") ($(r3 "$(col "$q1" Q8 3)") CPU s) and +Q9 $(r3 "$(col "$q1" Q9 4)") ($(r3 "$(col "$q1" Q9 3)") CPU s):"
   echo "  +Q9 adds only media and radiosity, which the default look does not use."
-  echo "- Anti-aliasing is most of the render's cost: +R2 costs $(col "$a1" "+A0.3+R2" 3) CPU s for RMSE $(col "$a1" "+A0.3+R2" 4), about half the default's."
+  echo "- Anti-aliasing is most of the render's cost: +R2 costs $(r3 "$(col "$a1" "+A0.3+R2" 3)") CPU s for RMSE $(r3 "$(col "$a1" "+A0.3+R2" 4)"), about half the default's."
   echo
   echo "Recommended: preview +Q8 without anti-aliasing at 320x240 (\`render.quality = 8\`, \`render.antialias ="
   echo "false\`); final the defaults (+Q9 +A0.3 +R3, 640x480); a large shot +A0.3 +R2 (\`render.antialias_depth = 2\`)."

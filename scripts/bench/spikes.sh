@@ -29,7 +29,7 @@ top="$(kv top_a_m "$top")"
 # spiky NAME RESOLUTION ITERATIONS: $work/NAME.ply, best wall time in $seconds.
 spiky() {
   bench_best seconds "$repeats" "$bin/ferro-spikes" "$work/surface.ply" --particles "$frame" --scene "$scene" \
-    "${sets[@]}" --set "spikes.resolution=$2" --set "spikes.remesh_iterations=$3" --out "$work/$1.ply" --quiet
+    "${sets[@]}" --set "spikes.resolution=$2" --set "spikes.remesh_iterations=$3" --out "$work/$1.ply"
 }
 repeats=1 spiky reference "$ref_res" "$ref_it"
 ref_seconds="$seconds"
@@ -68,6 +68,8 @@ bench_plot "$out/spikes_remesh_iterations.csv" cpu_seconds tip_mean_distance_m s
 } > "$out/spikes_presets.csv"
 bench_plot "$out/spikes_presets.csv" cpu_seconds tip_mean_distance_m spikes_presets "ferro-spikes at the presets' resolution / remesh_iterations"
 
+mm() { awk -v x="$1" 'BEGIN { if (x == "") print "?"; else printf "%.3g mm", 1000 * x }'; }
+r3() { awk -v x="$1" 'BEGIN { if (x == "") print "?"; else printf "%.3g", x }'; }
 table() {
   awk -F, 'NR == 1 { h = "|"; s = "|"; for (i = 1; i < NF; ++i) { h = h " " $i " |"; s = s " --- |" }; print h; print s; next }
            { r = "|"; for (i = 1; i < NF; ++i) r = r " " $i " |"; print r }' "$1"
@@ -98,12 +100,12 @@ r1="$out/spikes_resolution.csv" i1="$out/spikes_remesh_iterations.csv"
   echo
   echo "Findings:"
   echo
-  echo "- Default (resolution 16, 3 rounds): $(col "$r1" "resolution 16" 5) triangles in $(col "$r1" "resolution 16" 4) s, tips"
-  echo "  $(col "$r1" "resolution 16" 6) m (mean) from the finest mesh, tallest tip off by $(col "$r1" "resolution 16" 9) m."
-  echo "- Resolution 8: $(col "$r1" "resolution 8" 5) triangles in $(col "$r1" "resolution 8" 4) s, tips $(col "$r1" "resolution 8" 6) m (mean),"
-  echo "  tallest tip off by $(col "$r1" "resolution 8" 9) m; resolution 4: tips $(col "$r1" "resolution 4" 6) m, tallest off by $(col "$r1" "resolution 4" 9) m."
-  echo "- No remeshing (0 rounds): tips $(col "$i1" "iterations 0" 6) m (mean), tallest off by $(col "$i1" "iterations 0" 9) m, in $(col "$i1" "iterations 0" 4) s;"
-  echo "  1 round $(col "$i1" "iterations 1" 6) m in $(col "$i1" "iterations 1" 4) s, 3 rounds (default) $(col "$i1" "iterations 3" 6) m in $(col "$i1" "iterations 3" 4) s:"
+  echo "- Default (resolution 16, 3 rounds): $(col "$r1" "resolution 16" 5) triangles in $(r3 "$(col "$r1" "resolution 16" 4)") s, tips"
+  echo "  $(mm "$(col "$r1" "resolution 16" 6)") (mean) from the finest mesh, tallest tip off by $(mm "$(col "$r1" "resolution 16" 9)")."
+  echo "- Resolution 8: $(col "$r1" "resolution 8" 5) triangles in $(r3 "$(col "$r1" "resolution 8" 4)") s, tips $(mm "$(col "$r1" "resolution 8" 6)") (mean),"
+  echo "  tallest tip off by $(mm "$(col "$r1" "resolution 8" 9)"); resolution 4: tips $(mm "$(col "$r1" "resolution 4" 6)"), tallest off by $(mm "$(col "$r1" "resolution 4" 9)")."
+  echo "- No remeshing (0 rounds): tips $(mm "$(col "$i1" "iterations 0" 6)") (mean), tallest off by $(mm "$(col "$i1" "iterations 0" 9)"), in $(r3 "$(col "$i1" "iterations 0" 4)") s;"
+  echo "  1 round $(mm "$(col "$i1" "iterations 1" 6)") in $(r3 "$(col "$i1" "iterations 1" 4)") s, 3 rounds (default) $(mm "$(col "$i1" "iterations 3" 6)") in $(r3 "$(col "$i1" "iterations 3" 4)") s:"
   echo "  after the first round more rounds buy no tip accuracy (they even out the triangles, which this does not measure)."
   echo
   echo "For scale: at 640x480 the default camera sees the 10 cm dish at about 0.2 mm per pixel, so tip errors"

@@ -78,6 +78,8 @@ elif [[ $quick == 1 ]]; then
 fi
 
 # ---- the Markdown section ----
+mm() { awk -v x="$1" 'BEGIN { if (x == "") print "?"; else printf "%.3g mm", 1000 * x }'; }
+r3() { awk -v x="$1" 'BEGIN { if (x == "") print "?"; else printf "%.3g", x }'; }
 table() { # CSV -> Markdown table (all columns but the reference)
   awk -F, 'NR == 1 { h = "|"; s = "|"; for (i = 1; i < NF; ++i) { h = h " " $i " |"; s = s " --- |" }; print h; print s; next }
            { r = "|"; for (i = 1; i < NF; ++i) r = r " " $i " |"; print r }' "$1"
@@ -108,12 +110,12 @@ v1="$out/surface_voxel.csv" m1="$out/surface_method.csv"
   echo
   echo "Findings:"
   echo
-  echo "- Voxel = spacing/2 (the default) lies $(col "$v1" "0.5 spacing" 5) m from the reference on average"
-  echo "  (max $(col "$v1" "0.5 spacing" 6) m), in $(col "$v1" "0.5 spacing" 3) s; voxel = spacing: $(col "$v1" "1 spacing" 5) m mean, $(col "$v1" "1 spacing" 3) s;"
-  echo "  voxel = spacing/4: $(col "$v1" "0.25 spacing" 5) m mean, $(col "$v1" "0.25 spacing" 3) s."
+  echo "- Voxel = spacing/2 (the default) lies $(mm "$(col "$v1" "0.5 spacing" 5)") from the reference on average"
+  echo "  (max $(mm "$(col "$v1" "0.5 spacing" 6)")), in $(r3 "$(col "$v1" "0.5 spacing" 3)") s; voxel = spacing: $(mm "$(col "$v1" "1 spacing" 5)") mean, $(r3 "$(col "$v1" "1 spacing" 3)") s;"
+  echo "  voxel = spacing/4: $(mm "$(col "$v1" "0.25 spacing" 5)") mean, $(r3 "$(col "$v1" "0.25 spacing" 3)") s."
   echo "- Enclosed volume against the reference: $(col "$v1" "1 spacing" 8) % at voxel = spacing, $(col "$v1" "0.5 spacing" 8) % at spacing/2."
-  echo "- Method at spacing/2: anisotropic $(col "$m1" anisotropic 5) m mean in $(col "$m1" anisotropic 3) s, isotropic"
-  echo "  $(col "$m1" isotropic 5) m in $(col "$m1" isotropic 3) s, openvdb $(col "$m1" openvdb 5) m in $(col "$m1" openvdb 3) s."
+  echo "- Method at spacing/2: anisotropic $(mm "$(col "$m1" anisotropic 5)") mean in $(r3 "$(col "$m1" anisotropic 3)") s, isotropic"
+  echo "  $(mm "$(col "$m1" isotropic 5)") in $(r3 "$(col "$m1" isotropic 3)") s, openvdb $(mm "$(col "$m1" openvdb 5)") in $(r3 "$(col "$m1" openvdb 3)") s."
   echo
   echo "Recommended, all presets: \`surface.method = anisotropic\`, \`surface.voxel_size = 0\` (spacing/2, the"
   echo "defaults). The surface is the cheapest stage per frame (compare spikes.md and render.md), so a"
