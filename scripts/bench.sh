@@ -2,7 +2,7 @@
 # bench.sh: the speed/accuracy report: every stage's knobs measured against converged
 # reference runs of the same scene, a peer comparison, and the presets chosen from them.
 #
-#   scripts/bench.sh [OUT_DIR] [--only AREA[,AREA...]] [--no-build]
+#   scripts/bench.sh [OUT_DIR] [--only AREA[,AREA...]] [--no-build] [--assemble]
 #
 # OUT_DIR (default tests/bench/report, committed) receives per knob a CSV and a PNG plot, per
 # area a Markdown section, and README.md: the sections under a short intro, the guide and the
