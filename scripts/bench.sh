@@ -120,7 +120,10 @@ Made by `scripts/bench.sh` (this directory is its default output; `BENCH_QUICK=1
 sizes to check the scripts and is not how this report was made). Every error below is
 measured against a converged reference run of the same scene (the finest setting of that
 knob, named in each CSV's `reference` column), never against a guess. Costs are CPU seconds
-or ratios: the machine is shared, so wall times would measure the neighbours too. Each area
+or ratios: the machine is shared, so wall times would measure the neighbours too. Even CPU
+seconds vary by up to about 25 % between two runs of one setting here (the same setting
+appears in two tables of a section now and then: compare them), so read ratios between
+settings an order of magnitude apart, not the second digit. Each area
 is `scripts/bench/<area>.sh OUT_DIR`; each knob has a CSV (one row per setting) and a plot
 of cost (log scale) against error (`scripts/bench/plot.sh`).
 
