@@ -16,6 +16,8 @@
 #   SHOT_FIRST, SHOT_LAST   the shot's frames (the range of shot/shot.ini and of the video)
 #   SPIKES       1: run ferro-spikes between ferro-surface and ferro-pov; 0: export the surface
 #   MAX_FRAMES   optional: simulate only up to this frame (ferro-sim --max-frames)
+#   SETS         optional: scene overrides for every stage, words --set=section.key=value (a
+#                preset and shot.sh's --set); each stage's stamp holds those of its sections
 #
 # Targets (run in OUTDIR, or make -C OUTDIR ...):
 #   make -j2                     everything: all frames up to PNG, then the video
@@ -39,6 +41,10 @@ FFMPEG ?= ffmpeg
 # Extra POV-Ray options for every frame, e.g. POVRAY_ARGS='+W320 +H240' for a preview.
 POVRAY_ARGS ?=
 
+SETS ?=
+# $(call sets_of,sections): the SETS words of these sections (for a stage's stamp).
+sets_of = $(filter $(foreach s,$(1),--set=$(s).%),$(SETS))
+
 FRAMES := $(shell seq -f %04g $(FIRST) $(LAST))
 SHOT_FRAMES := $(shell seq -f %04g $(SHOT_FIRST) $(SHOT_LAST))
 
@@ -53,11 +59,11 @@ SECTION_AWK := BEGIN { n = split(want, w, " "); for (i = 1; i <= n; i++) keep[w[
 scene_stamp = $(shell mkdir -p .scene && t=.scene/.$(1).$$$$ && \
   awk -v want='$(2)' '$(SECTION_AWK)' '$(SCENE)' > $$t && echo '$(3)' >> $$t && \
   if cmp -s $$t .scene/$(1).toml; then rm -f $$t; else mv -f $$t .scene/$(1).toml; fi)
-$(call scene_stamp,sim,shot fluid container sim magnets magnetization,max_frames=$(MAX_FRAMES))
-$(call scene_stamp,surface,surface,)
-$(call scene_stamp,spikes,spikes magnets magnetization,)
-$(call scene_stamp,export,magnets shot,)
-$(call scene_stamp,render,render container shot magnets,shot_frames=$(SHOT_FIRST):$(SHOT_LAST))
+$(call scene_stamp,sim,shot fluid container sim magnets magnetization,max_frames=$(MAX_FRAMES) $(call sets_of,shot fluid container sim magnets magnetization))
+$(call scene_stamp,surface,surface,$(call sets_of,surface))
+$(call scene_stamp,spikes,spikes magnets magnetization,$(call sets_of,spikes magnets magnetization))
+$(call scene_stamp,export,magnets shot,$(call sets_of,magnets shot))
+$(call scene_stamp,render,render container shot magnets,shot_frames=$(SHOT_FIRST):$(SHOT_LAST) $(call sets_of,render container shot magnets))
 
 # 0010 -> 10 (a leading zero would read as octal to some parsers).
 frame_number = $$((10\#$(1)))
@@ -75,7 +81,7 @@ prepare: particles/.complete shot/shot.pov shot/look.inc
 # shot but not the pre-roll).
 particles/.complete: .scene/sim.toml
 	rm -rf particles.new
-	$(FERRO_BIN)/ferro-sim '$(SCENE)' --out particles.new --preroll-cache preroll.ply --quiet $(if $(MAX_FRAMES),--max-frames $(MAX_FRAMES))
+	$(FERRO_BIN)/ferro-sim '$(SCENE)' --out particles.new --preroll-cache preroll.ply --quiet $(if $(MAX_FRAMES),--max-frames $(MAX_FRAMES)) $(SETS)
 	touch particles.new/.complete
 	rm -rf particles.old
 	if [ -d particles ]; then mv particles particles.old; fi
@@ -91,11 +97,11 @@ particles/particles_%.ply: particles/.complete
 # ---- Per frame ----------------------------------------------------------------------------------
 surface/surface_%.ply: particles/particles_%.ply .scene/surface.toml
 	@mkdir -p surface
-	$(FERRO_BIN)/ferro-surface $< --scene '$(SCENE)' --out $@ --quiet
+	$(FERRO_BIN)/ferro-surface $< --scene '$(SCENE)' --out $@ --quiet $(SETS)
 
 spiky/spiky_%.ply: surface/surface_%.ply particles/particles_%.ply .scene/spikes.toml
 	@mkdir -p spiky
-	$(FERRO_BIN)/ferro-spikes $< --particles particles/particles_$*.ply --scene '$(SCENE)' --out $@ --quiet
+	$(FERRO_BIN)/ferro-spikes $< --particles particles/particles_$*.ply --scene '$(SCENE)' --out $@ --quiet $(SETS)
 
 ifeq ($(SPIKES),1)
 EXPORTED_MESH := spiky/spiky_%.ply
@@ -105,16 +111,16 @@ endif
 
 # Both includes come from one ferro-pov run (a grouped pattern rule).
 shot/mesh_%.inc shot/magnets_%.inc: $(EXPORTED_MESH) .scene/export.toml
-	$(FERRO_BIN)/ferro-pov $< --scene '$(SCENE)' --frame $(call frame_number,$*) --out shot --no-shot --quiet
+	$(FERRO_BIN)/ferro-pov $< --scene '$(SCENE)' --frame $(call frame_number,$*) --out shot --no-shot --quiet $(SETS)
 
 # The shot files. ferro-pov rewrites shot.pov and the .ini files only when their text changes;
 # the touch marks them as made from the current [render].
 shot/shot.pov: .scene/render.toml
-	$(FERRO_BIN)/ferro-pov --scene '$(SCENE)' --out shot --shot-frames $(SHOT_FIRST):$(SHOT_LAST) --quiet
+	$(FERRO_BIN)/ferro-pov --scene '$(SCENE)' --out shot --shot-frames $(SHOT_FIRST):$(SHOT_LAST) --quiet $(SETS)
 	touch $@
 # The look template is written only when missing; after that it is the artists' file.
 shot/look.inc: | shot/shot.pov
-	$(FERRO_BIN)/ferro-pov --scene '$(SCENE)' --out shot --shot-frames $(SHOT_FIRST):$(SHOT_LAST) --quiet
+	$(FERRO_BIN)/ferro-pov --scene '$(SCENE)' --out shot --shot-frames $(SHOT_FIRST):$(SHOT_LAST) --quiet $(SETS)
 
 png/frame_%.png: shot/mesh_%.inc shot/magnets_%.inc shot/shot.pov shot/look.inc
 	@mkdir -p png shot/log

@@ -2,27 +2,42 @@
 # shot.sh: runs a whole shot: simulate, then per frame surface, spikes, POV-Ray export and
 # render, then a video (shot.mp4) and a GIF (shot.gif) when ffmpeg is installed.
 #
-#   scripts/shot.sh SCENE.toml OUTDIR [--frames A:B] [--max-frames N] [-j JOBS] [--no-video]
+#   scripts/shot.sh SCENE.toml OUTDIR [--preset NAME] [--set KEY=VALUE]... [--frames A:B]
+#                   [--max-frames N] [-j JOBS] [--no-video] [--no-run]
 #
 # It writes OUTDIR/Makefile (see scripts/shot.mk) and runs make in OUTDIR, so a second run
 # re-does only what changed (a scene section, the look, a deleted file), and
 # `make -C OUTDIR -j2 FIRST=10 LAST=20` re-renders part of a shot by hand. ferro-spikes runs
 # when it is built and the scene has [[magnets]]; otherwise the surface goes straight to
 # ferro-pov.
+#   --preset NAME     preview, final or large: the quality settings of scripts/presets.conf,
+#                     chosen from the measured trade (tests/bench/report/README.md)
+#   --set KEY=VALUE   override a scene key in every stage (after the preset's), e.g.
+#                     --set render.width=480; repeatable
 #   --frames A:B      render only frames A..B (the simulation still starts at frame 0)
 #   --max-frames N    simulate and render only frames 0..N (a preview of a long shot)
 #   -j JOBS           frames in flight (default: the number of cores)
 #   --no-video        stop after the PNGs
+#   --no-run          write OUTDIR/Makefile and stop (run make -C OUTDIR yourself)
 # Environment: FERRO_BIN (default: build/bin of this checkout), POVRAY_ARGS (extra povray
 # options per frame, e.g. '+W320 +H240').
 set -euo pipefail
 root="$(cd "$(dirname "$0")/.." && pwd)"
-usage() { sed -n '2,20s/^# \{0,1\}//p' "$0"; }
+usage() { sed -n '2,27s/^# \{0,1\}//p' "$0"; }
 die() { echo "shot.sh: error: $*" >&2; exit 2; }
 
-scene="" out="" frames="" max_frames="" jobs="$(nproc)" video=1
+scene="" out="" frames="" max_frames="" jobs="$(nproc)" video=1 run=1 preset="" sets=() set_args=()
+# A --set KEY=VALUE: a dotted key and a plain TOML scalar or array, nothing make or the shell
+# would read differently (no spaces, quotes or $).
+add_set() {
+  [[ "$1" =~ ^[A-Za-z0-9_]+(\.[A-Za-z0-9_]+)+=[][A-Za-z0-9_.,+:-]+$ ]] || die "--set needs section.key=value without spaces, quotes or \$ (got '$1')"
+  sets+=("--set=$1")
+}
 while [[ $# -gt 0 ]]; do
   case "$1" in
+    --preset) preset="${2:?--preset needs a name}"; shift 2 ;;
+    --set) set_args+=("${2:?--set needs KEY=VALUE}"); shift 2 ;;
+    --no-run) run=0; shift ;;
     --frames) frames="${2:?--frames needs A:B}"; shift 2 ;;
     --max-frames) max_frames="${2:?--max-frames needs N}"; shift 2 ;;
     -j) jobs="${2:?-j needs a number}"; shift 2 ;;
@@ -42,6 +57,14 @@ done
 # 10#: "08" is eight, not a bad octal number.
 [[ -z "$max_frames" ]] || max_frames="$((10#$max_frames))"
 [[ "$jobs" =~ ^[1-9][0-9]*$ ]] || die "-j needs a positive number (got '$jobs')"
+# The preset's settings first, then the --set ones (the later of two settings of a key wins).
+if [[ -n "$preset" ]]; then
+  presets="$root/scripts/presets.conf"
+  names="$(awk '/^[a-z]/ { print $1 }' "$presets" | sort -u | tr '\n' ' ')"
+  [[ " $names" == *" $preset "* ]] || die "unknown preset '$preset' (presets: ${names% })"
+  while read -r setting; do add_set "$setting"; done < <(awk -v p="$preset" '$1 == p { print $2 }' "$presets")
+fi
+for setting in "${set_args[@]}"; do add_set "$setting"; done
 
 bin="${FERRO_BIN:-$root/build/bin}"
 bin="$(cd "$bin" 2>/dev/null && pwd)" || die "no Ferro executables in ${FERRO_BIN:-$root/build/bin} (run scripts/build.sh)"
@@ -57,7 +80,7 @@ out="$(cd "$out" && pwd)"
 # (into a scratch directory: the shot's own files are make's business).
 probe="$(mktemp -d)"
 trap 'rm -rf "$probe"' EXIT
-"$bin/ferro-pov" --scene "$scene" --out "$probe" --quiet
+"$bin/ferro-pov" --scene "$scene" --out "$probe" --quiet "${sets[@]}"
 last="$(sed -n 's/^Final_Frame=//p' "$probe/shot.ini")"
 if [[ -n "$max_frames" && "$max_frames" -lt "$last" ]]; then last="$max_frames"; fi
 first_render=0 last_render="$last"
@@ -82,12 +105,17 @@ SHOT_FIRST := 0
 SHOT_LAST := $last
 SPIKES := $spikes
 MAX_FRAMES := ${max_frames:+$last}
+SETS := ${sets[*]}
 include $root/scripts/shot.mk
 MAKEFILE
 mv -f "$out/Makefile.tmp" "$out/Makefile"
 
+if [[ $run == 0 ]]; then
+  echo "shot.sh: wrote $out/Makefile${preset:+ (preset $preset)}; run: make -C $out -j$jobs" >&2
+  exit 0
+fi
 start=$SECONDS
-echo "shot.sh: $scene -> $out: frames $first_render..$last_render of 0..$last, spikes $([[ $spikes == 1 ]] && echo on || echo off), $jobs jobs" >&2
+echo "shot.sh: $scene -> $out: frames $first_render..$last_render of 0..$last, spikes $([[ $spikes == 1 ]] && echo on || echo off), $jobs jobs${preset:+, preset $preset}" >&2
 make -C "$out" --no-print-directory -j"$jobs" prepare
 make -C "$out" --no-print-directory -j"$jobs" FIRST="$first_render" LAST="$last_render" frames
 if [[ $video == 1 && -z "$frames" ]]; then

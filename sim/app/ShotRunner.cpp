@@ -63,6 +63,13 @@ std::string magnetSummary(const FluidSimulation& sim) {
     return o.str();
 }
 
+// The viscosity method in use; for "auto", which one it chose (said, so a user can see why
+// a thick fluid's steps cost what they do).
+std::string viscositySummary(const FluidSimulation& sim) {
+    const bool chosen = sim.scene().fluid.viscosityMethod == FluidParams::ViscosityMethod::Auto;
+    return std::string(sim.implicitViscosity() ? "implicit" : "explicit") + " viscosity" + (chosen ? " (auto)" : "");
+}
+
 } // namespace
 
 void runShot(const SimScene& scene, const RunOptions& opt) {
@@ -152,7 +159,7 @@ void runShot(const SimScene& scene, const RunOptions& opt) {
     }
     if (!opt.quiet)
         std::cerr << "ferro-sim: " << sim.size() << " particles, spacing " << sim.spacing() * 1e3 << " mm, "
-                  << sim.pressureSolverLabel() << (sim.implicitViscosity() ? " + implicit viscosity" : "") << ", "
+                  << sim.pressureSolverLabel() << ", " << viscositySummary(sim) << ", "
                   << sim.boundaryPositions().size() << " boundary particles"
                   << magnetSummary(sim) << "; "
                   << (resumed ? "resuming after frame " + std::to_string(frame) : std::string("starting"))

@@ -6,9 +6,11 @@
 
 #include <catch2/catch.hpp>
 
+#include <algorithm>
 #include <chrono>
 #include <map>
 #include <regex>
+#include <vector>
 
 using namespace ferro;
 using namespace ferro::povtest;
@@ -203,4 +205,56 @@ TEST_CASE("shot.sh rejects bad arguments with one line and exit code 2 (a missin
     CHECK(res.output.find("ends at frame 3") != std::string::npos);
     res = run(shot + "'" + (dir / "tiny.toml").string() + "' '" + (dir / "out").string() + "' --frames 0:99999999999");
     CHECK(res.code == 2);
+}
+
+TEST_CASE("shot.sh --preset passes the documented settings to the stages; an unknown preset is exit 2", "[pov][pipeline]")
+{
+    // The presets are scripts/presets.conf, documented in scripts/README.md and the report
+    // (tests/bench/report/README.md). Here: the values reach ferro-pov's render.ini (the tiny
+    // scene's own [render] width 48 is overridden), the spike keys reach the spikes stamp, a
+    // --set after the preset wins, and an unknown preset is one line with exit code 2.
+    const fs::path dir = freshDir("shot_presets");
+    spit(dir / "tiny.toml", kTinyScene);
+    const std::string shot =
+        "FERRO_BIN='" + pipelineBin() + "' '" + kSource + "/scripts/shot.sh' '" + (dir / "tiny.toml").string() + "' ";
+
+    Result res = run(shot + "'" + (dir / "bad").string() + "' --preset fastest");
+    CHECK(res.code == 2);
+    CHECK(res.output.rfind("shot.sh: error: unknown preset 'fastest' (presets: final large preview)", 0) == 0);
+    CHECK(std::count(res.output.begin(), res.output.end(), '\n') == 1);
+
+    struct Expected {
+        const char* preset;
+        std::vector<std::string> ini;    // lines of shot/render.ini
+        std::vector<std::string> spikes; // lines of the spikes stamp .scene/spikes.toml
+    };
+    const std::vector<Expected> presets = {
+        {"preview", {"Width=320", "Height=240", "Quality=8", "Antialias=off"},
+         {"--set=spikes.resolution=8", "--set=spikes.remesh_iterations=1"}},
+        {"final", {"Width=640", "Height=480", "Quality=9", "Antialias=on", "Antialias_Threshold=0.3", "Antialias_Depth=3"},
+         {"--set=spikes.resolution=16", "--set=spikes.remesh_iterations=3"}},
+        {"large", {"Width=640", "Height=480", "Quality=9", "Antialias=on", "Antialias_Threshold=0.3", "Antialias_Depth=2"},
+         {"--set=spikes.resolution=12", "--set=spikes.remesh_iterations=1"}},
+    };
+    for (const Expected& e : presets) {
+        INFO("preset " << e.preset);
+        const fs::path out = dir / e.preset;
+        res = run(shot + "'" + out.string() + "' --no-run --preset " + e.preset);
+        INFO(res.output);
+        REQUIRE(res.code == 0);
+        // Only ferro-pov's shot files: no simulation, no render.
+        res = run("make -C '" + out.string() + "' --no-print-directory shot/shot.pov");
+        INFO(res.output);
+        REQUIRE(res.code == 0);
+        const std::string ini = slurp(out / "shot" / "render.ini");
+        for (const std::string& line : e.ini) CHECK(ini.find("\n" + line + "\n") != std::string::npos);
+        const std::string stamp = slurp(out / ".scene" / "spikes.toml");
+        for (const std::string& word : e.spikes) CHECK(stamp.find(word) != std::string::npos);
+    }
+
+    const fs::path out = dir / "override";
+    res = run(shot + "'" + out.string() + "' --no-run --preset preview --set render.width=100");
+    REQUIRE(res.code == 0);
+    REQUIRE(run("make -C '" + out.string() + "' --no-print-directory shot/shot.pov").code == 0);
+    CHECK(slurp(out / "shot" / "render.ini").find("\nWidth=100\n") != std::string::npos);
 }
