@@ -2,7 +2,8 @@
 # Installs Ferro's Debian 12 build and run dependencies that are missing. clang and
 # libclang-rt-dev build the libFuzzer targets of tests/fuzz, which the test suite runs briefly
 # (libFuzzer's library is only a recommend of clang, and recommends are not installed).
-# Idempotent: installs nothing when everything is present. Usage: install-deps.sh [--with-video]
+# Idempotent: installs nothing when everything is present.
+# Usage: install-deps.sh [--with-video] [--with-bench]
 # As root it runs apt-get;
 # otherwise it prints the exact apt-get line to run and exits 1.
 set -euo pipefail
@@ -17,9 +18,14 @@ PACKAGES=(
 
 # --with-video: also ffmpeg, which the demo uses to assemble the rendered frames into a
 # video and a GIF (the tests do not need it, so CI does not install it).
-if [[ "${1:-}" == "--with-video" ]]; then
-  PACKAGES+=(ffmpeg)
-fi
+# --with-bench: also gnuplot, which scripts/bench.sh uses to plot the report.
+for arg in "$@"; do
+  case "$arg" in
+    --with-video) PACKAGES+=(ffmpeg) ;;
+    --with-bench) PACKAGES+=(gnuplot-nox) ;;
+    *) echo "install-deps: error: unknown option $arg (--with-video, --with-bench)" >&2; exit 2 ;;
+  esac
+done
 
 missing=()
 for p in "${PACKAGES[@]}"; do
