@@ -1,0 +1,118 @@
+#!/usr/bin/env bash
+# magnetics.sh: the magnetization solver's speed/accuracy trade (issue 16): solver (external,
+# direct, tree, auto), the tree's opening angle and the re-solve interval.
+#
+#   scripts/bench/magnetics.sh [OUT_DIR]   (default tests/bench/report; BENCH_QUICK=1: tiny)
+#
+# Two measurements:
+# - Field error, per particle, on real particle sets: the settled heap-pool frames of sim.sh
+#   (2,560 and 10,240 particles; run sim.sh first, bench.sh does) through bench-magnetization
+#   --particles: each solver's cold solve against the direct solve on the same particles,
+#   relative RMS and worst particle, and CPU ms per solve (one thread).
+#   -> magnetization_solver.csv, opening_angle.csv
+# - Heap error and cost per step: the heap pool simulated (scripts/bench/heap_pool.toml,
+#   SETTLE s) with each solver and re-solve rule, at 2,560 particles (sim.sh's base count, where
+#   the O(N^2) reference is affordable), against the reference run: `direct`, re-solved every
+#   step. The `external` row is sim.sh's base run.
+#   -> magnetics_heap.csv (solver / opening angle / re-solve interval, one row each)
+# Plots each CSV (cost on x, log) and writes OUT_DIR/magnetics.md.
+set -euo pipefail
+here="$(cd "$(dirname "$0")" && pwd)"
+source "$here/sim-lib.sh"
+out="${1:-$bench_root/tests/bench/report}"
+mkdir -p "$out/cache"
+out="$(cd "$out" && pwd)"
+cache="$out/cache"
+for exe in ferro-sim bench-heap-profile bench-magnetization; do
+    [[ -x "$bench_bin/$exe" ]] || { echo "magnetics.sh: error: $bench_bin/$exe is missing (run scripts/build.sh)" >&2; exit 4; }
+done
+if [[ "${BENCH_QUICK:-0}" == 1 ]]; then
+    settle=0.5 count=320 field_counts=(320 640)
+else
+    settle=1.5 count=2560 field_counts=(2560 10240)
+fi
+echo "magnetics.sh: heap pool, settle ${settle} s, $count particles for the heap runs"
+
+# --- Field error on the settled frames (external magnetization runs of sim.sh's ladder).
+for n in "${field_counts[@]}"; do
+    echo "p$n fluid.block.0.count=$n"
+done | sim_batch "$cache" "$settle"
+fieldcsv="$cache/magnetics_field.csv"
+: >"$fieldcsv"
+for n in "${field_counts[@]}"; do
+    f="$cache/field_$n.csv"
+    key="$(sha1sum "$(sim_last_frame "$cache" "p$n")" | cut -c1-16)-$sources_hash"
+    if [[ ! -f "$f.key" || "$(cat "$f.key")" != "$key" ]]; then
+        echo "  bench-magnetization on the settled p$n frame"
+        nice -n 5 "$bench_bin/bench-magnetization" --threads 1 --particles "$(sim_last_frame "$cache" "p$n")" \
+            --thetas 0.3,0.5,0.8,1.2 >"$f.tmp"
+        mv "$f.tmp" "$f"
+        echo "$key" >"$f.key"
+    fi
+    tail -n +2 "$f" >>"$fieldcsv"
+done
+# bench-magnetization rows: solver,opening_angle,particles,cpu_ms_per_solve,iterations,field_rms_err,field_max_err,reference
+{
+    echo "setting,particles,cpu_ms_per_solve,iterations,speedup_vs_direct,field_rms_err_pct,field_max_err_pct,reference"
+    awk -F, '$1 == "direct" { d[$3] = $4 } { rows[NR] = $0 }
+        END { for (i = 1; i <= NR; i++) { split(rows[i], c, ",");
+              if (c[1] ~ /^tree/ && c[2] != 0.5) continue;
+              name = c[1] (c[1] == "tree" ? " theta " c[2] : "");
+              printf "%s (%s),%s,%s,%s,%.1f,%.3f,%.3f,direct solve, same particles\n", name, c[3], c[3], c[4], c[5],
+                     d[c[3]] / c[4], 100 * c[6], 100 * c[7] } }' "$fieldcsv"
+} >"$out/magnetization_solver.csv"
+{
+    echo "setting,particles,cpu_ms_per_solve,iterations,speedup_vs_direct,field_rms_err_pct,field_max_err_pct,reference"
+    awk -F, '$1 == "direct" { d[$3] = $4 } { rows[NR] = $0 }
+        END { for (i = 1; i <= NR; i++) { split(rows[i], c, ",");
+              if (c[1] != "tree") continue;
+              printf "theta %s (%s),%s,%s,%s,%.1f,%.3f,%.3f,direct solve, same particles\n", c[2], c[3], c[3], c[4], c[5],
+                     d[c[3]] / c[4], 100 * c[6], 100 * c[7] } }' "$fieldcsv"
+} >"$out/opening_angle.csv"
+
+# --- Heap error and cost per step: simulations with the particles' own field.
+c="fluid.block.0.count=$count"
+{
+    echo "m${count}_direct_k1 $c magnetization.solver=\"direct\" magnetization.resolve_every=1"
+    echo "m${count}_direct $c magnetization.solver=\"direct\""
+    echo "m${count}_tree $c magnetization.solver=\"tree\""
+    echo "m${count}_tree_t1.0 $c magnetization.solver=\"tree\" magnetization.opening_angle=1.0"
+    echo "m${count}_tree_k10 $c magnetization.solver=\"tree\" magnetization.resolve_every=10"
+    echo "m${count}_tree_k50 $c magnetization.solver=\"tree\" magnetization.resolve_every=50"
+    echo "m${count}_auto $c magnetization.solver=\"auto\""
+    echo "p$count $c"
+} | sim_batch "$cache" "$settle"
+
+header="setting,particles,steps,solves,cpu_s_per_sim_s,cpu_ms_per_step,wall_s_per_sim_s,profile_rms_err_mm,profile_max_err_mm,centre_err_mm,rise_err_pct,rms_speed_mm_s,reference"
+mrow() {
+    local name="$1" setting="$2" ref="m${count}_direct_k1"
+    local s wall cpu steps solves
+    s="$("$bench_bin/bench-heap-profile" "$(sim_last_frame "$cache" "$name")" --ref "$(sim_last_frame "$cache" "$ref")" --summary)"
+    read -r wall cpu steps <"$cache/sim/$name/cost"
+    # Re-solves over the whole run, from the progress lines ("M solves a/b").
+    solves=$(sed -n 's/.*M solves \([0-9]*\)\/.*/\1/p' "$cache/sim/$name/log" | awk '{ s += $1 } END { print s + 0 }')
+    awk -v setting="$setting" -v n="$(kv "$s" particles)" -v steps="$steps" -v solves="$solves" -v cpu="$cpu" \
+        -v wall="$wall" -v T="$settle" -v prms="$(kv "$s" profile_rms_err_m)" -v pmax="$(kv "$s" profile_max_err_m)" \
+        -v ce="$(kv "$s" centre_err_m)" -v re="$(kv "$s" rise_err_rel)" -v v="$(kv "$s" rms_speed_m_s)" -v ref="$ref" \
+        'BEGIN { printf "%s,%d,%d,%d,%.1f,%.1f,%.1f,%.3f,%.3f,%.3f,%.1f,%.2f,%s\n", setting, n, steps, solves,
+                 cpu / T, 1e3 * cpu / steps, wall / T, 1e3 * prms, 1e3 * pmax, 1e3 * ce, 100 * re, 1e3 * v, ref }'
+}
+{
+    echo "$header"
+    mrow "p$count" "external"
+    mrow m${count}_auto "auto"
+    mrow m${count}_tree "tree theta 0.5"
+    mrow m${count}_tree_t1.0 "tree theta 1.0"
+    mrow m${count}_tree_k10 "tree every 10 steps"
+    mrow m${count}_tree_k50 "tree every 50 steps"
+    mrow m${count}_direct "direct"
+    mrow m${count}_direct_k1 "direct every step (ref)"
+} >"$out/magnetics_heap.csv"
+
+PLOT_YLOG=1 "$here/plot.sh" "$out/magnetization_solver.csv" cpu_ms_per_solve field_rms_err_pct "$out/magnetization_solver.png" \
+    "magnetization solver: per-particle field error vs cost (settled heap pool)" || echo "magnetics.sh: plot failed" >&2
+PLOT_YLOG=1 "$here/plot.sh" "$out/opening_angle.csv" cpu_ms_per_solve field_rms_err_pct "$out/opening_angle.png" \
+    "tree opening angle: per-particle field error vs cost (settled heap pool)" || echo "magnetics.sh: plot failed" >&2
+"$here/plot.sh" "$out/magnetics_heap.csv" cpu_s_per_sim_s profile_rms_err_mm "$out/magnetics_heap.png" \
+    "magnetics in the simulation: heap profile error vs cost ($count particles)" || echo "magnetics.sh: plot failed" >&2
+echo "magnetics.sh: wrote $out/{magnetization_solver,opening_angle,magnetics_heap}.csv and .png"
