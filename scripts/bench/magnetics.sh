@@ -175,6 +175,15 @@ $(csv_md "$Hp" setting steps solves cpu_s_per_sim_s cpu_ms_per_step profile_rms_
   $(g "$Hp" "tree every 10 steps" cpu_ms_per_step) tree every 10 steps, $(g "$Hp" auto cpu_ms_per_step) auto,
   $(g "$Hp" external cpu_ms_per_step) external.
 MD
-    cat "$here/magnetics-recommend.md"
+    cat <<MD
+
+### Recommended values (magnetics)
+
+| key | preview | final | large | why (numbers above) |
+|---|---|---|---|---|
+| \`magnetization.solver\` | tree | auto | tree | \`external\` is cheaper ($(g "$Hp" external cpu_s_per_sim_s) vs $(g "$Hp" "tree theta 0.5" cpu_s_per_sim_s) CPU s per simulated second) but its heap's rise is $(g "$Hp" external rise_err_pct) % off: a preview with it shows another heap. \`auto\` picked \`$(awk -F, '$1 ~ /^auto/ && $2 == n { sub(/^auto:/, "", $1); sub(/ .*/, "", $1); print $1; exit }' n="$n1" "$F")\` at $n1 particles, $(g "$F" "direct ($n1)" cpu_ms_per_solve) ms per cold solve where the tree (0.5) takes $(g "$F" "tree theta 0.5 ($n1)" cpu_ms_per_solve) ms with $(g "$F" "tree theta 0.5 ($n1)" field_rms_err_pct) % RMS error; for a large shot name the tree (direct is O(N^2)) |
+| \`magnetization.opening_angle\` | 1.0 | 0.5 | 0.8 | on $n2 particles: 0.5 $(g "$A" "theta 0.5 ($n2)" field_rms_err_pct) % RMS / $(g "$A" "theta 0.5 ($n2)" speedup_vs_direct)x direct, 0.8 $(g "$A" "theta 0.8 ($n2)" field_rms_err_pct) % / $(g "$A" "theta 0.8 ($n2)" speedup_vs_direct)x, 1.2 $(g "$A" "theta 1.2 ($n2)" field_rms_err_pct) % / $(g "$A" "theta 1.2 ($n2)" speedup_vs_direct)x; in the simulation 1.0 changes the heap by $(g "$Hp" "tree theta 1.0" profile_rms_err_mm) mm RMS |
+| \`magnetization.resolve_every\` | 0 (tolerance rule) | 0 | 0 | the tolerance rule re-solved $(g "$Hp" "tree theta 0.5" solves) times in $(g "$Hp" "tree theta 0.5" steps) steps; every 10 steps costs $(g "$Hp" "tree every 10 steps" cpu_s_per_sim_s) vs $(g "$Hp" "tree theta 0.5" cpu_s_per_sim_s) CPU s per simulated second; every 50 steps: heap $(g "$Hp" "tree every 50 steps" profile_rms_err_mm) mm RMS off, pool at $(g "$Hp" "tree every 50 steps" rms_speed_mm_s) mm/s |
+MD
 } >"$out/magnetics.md"
 echo "magnetics.sh: wrote $out/{magnetization_solver,opening_angle,magnetics_heap}.csv, .png and magnetics.md"

@@ -46,6 +46,7 @@ echo "sim.sh: heap pool, settle ${settle} s, particles ${counts[*]}, base $base,
     echo "tol5e-5 fluid.block.0.count=$base sim.max_density_error=5e-5"
     echo "dt2e-3 fluid.block.0.count=$base sim.max_dt=0.002"
     echo "dt5e-4 fluid.block.0.count=$base sim.max_dt=0.0005"
+    echo "cfl0.8 fluid.block.0.count=$base sim.cfl=0.8 sim.max_dt=0.002"
 } | sim_batch "$cache" "$settle"
 
 # row NAME REFNAME SETTING: "setting,particles,spacing_mm,steps,cpu_s_per_sim_s,cpu_ms_per_step,
@@ -85,6 +86,7 @@ row() {
 } >"$out/density_tolerance.csv"
 {
     echo "$header"
+    row cfl0.8 refB "2e-3 cfl 0.8"
     row dt2e-3 refB "2e-3"
     row "p$base" refB "1e-3"
     row dt5e-4 refB "5e-4"
@@ -175,6 +177,20 @@ $(csv_md "$T" setting steps cpu_s_per_sim_s cpu_ms_per_step profile_rms_err_mm p
   and $(g "$T" 2e-3 profile_rms_err_mm) / $(g "$T" 1e-3 profile_rms_err_mm) / $(g "$T" 5e-4 profile_rms_err_mm) mm RMS; the residual RMS speeds
   ($(g "$D" 1e-3 rms_speed_mm_s) / $(g "$D" 2e-4 rms_speed_mm_s) / $(g "$D" 5e-5 rms_speed_mm_s) mm/s) say how still each pool is.
 MD
-    cat "$here/sim-recommend.md"
+    cat <<MD
+
+### Recommended values (sim)
+
+For \`scripts/presets.conf\`. The particle count is a property of the scene (its blocks'
+\`count\` or \`fluid.spacing\`), so it is advice, not a preset key.
+
+| key | preview | final | large | why (numbers above) |
+|---|---|---|---|---|
+| particle spacing (\`fluid.spacing\` or the blocks' \`count\`) | 1.9 mm (10k in the paper's dish) | 1.2 mm (41k, the paper's) | 1.2 mm | 1.9 mm: heap profile $(g "$P" "$mid" profile_rms_err_mm) mm RMS off the 1.2 mm run (rise $(g "$P" "$mid" rise_err_pct) %) for 1/$(ratio "$(g "$P" "$fine" cpu_s_per_sim_s)" "$(g "$P" "$mid" cpu_s_per_sim_s)") of the cost; 3 mm: $(g "$P" "$lo" profile_rms_err_mm) mm (rise $(g "$P" "$lo" rise_err_pct) %), too coarse even for a preview of a 1 cm layer |
+| \`sim.solver\` | dfsph | dfsph | dfsph | WCSPH costs about the same per simulated second ($(g "$S" wcsph cpu_s_per_sim_s) vs $(g "$S" dfsph cpu_s_per_sim_s) CPU s) with $(ratio "$(g "$S" wcsph steps)" "$(g "$S" dfsph steps)")x the steps, and its heap is $(g "$S" wcsph profile_rms_err_mm) mm RMS off (rise $(g "$S" wcsph rise_err_pct) %) against DFSPH's $(g "$S" dfsph profile_rms_err_mm) mm |
+| \`sim.max_density_error\` | 1e-3 | 2e-4 | 1e-3 | 1e-3 costs 1/$(ratio "$(g "$D" 2e-4 cpu_s_per_sim_s)" "$(g "$D" 1e-3 cpu_s_per_sim_s)") of the default with the same settled heap ($(g "$D" 1e-3 profile_rms_err_mm) mm RMS), but the pool keeps $(g "$D" 1e-3 rms_speed_mm_s) mm/s RMS instead of $(g "$D" 2e-4 rms_speed_mm_s): final frames of a pool that must stand still keep 2e-4 (the default, issue 13); a large shot whose fluid moves anyway takes 1e-3 |
+| \`sim.max_dt\` [s] | 1e-3 | 1e-3 | 1e-3 | 2e-3 takes $(g "$T" 2e-3 steps) steps, as many as 1e-3 ($(g "$T" 1e-3 steps)): under a strong magnet another bound sets the step (the force criterion 0.25 sqrt(h/\|a\|) of FluidSimulation); 5e-4 costs $(ratio "$(g "$T" 5e-4 cpu_s_per_sim_s)" "$(g "$T" 1e-3 cpu_s_per_sim_s)")x for no gain ($(g "$T" 5e-4 profile_rms_err_mm) mm) |
+| \`sim.cfl\` | 0.4 | 0.4 | 0.4 | 0.8 (with max_dt 2e-3): $(g "$T" "2e-3 cfl 0.8" steps) steps, $(g "$T" "2e-3 cfl 0.8" cpu_s_per_sim_s) CPU s per simulated second: no saving on this scene |
+MD
 } >"$out/sim.md"
 echo "sim.sh: wrote $out/{particles,pressure_solver,density_tolerance,max_dt}.csv, .png and sim.md"
