@@ -95,7 +95,7 @@ row() {
 
 for k in particles pressure_solver density_tolerance max_dt; do
     "$here/plot.sh" "$out/$k.csv" cpu_s_per_sim_s profile_rms_err_mm "$out/$k.png" \
-        "ferro-sim $k: heap profile error vs cost (heap pool, settle $settle s)" || echo "sim.sh: plot of $k failed" >&2
+        "ferro-sim ${k//_/ }: heap profile error vs cost (heap pool, settle $settle s)" || echo "sim.sh: plot of $k failed" >&2
 done
 
 # --- The Markdown section. Numbers come from the CSVs above; the recommendations table is
