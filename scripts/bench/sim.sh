@@ -139,9 +139,9 @@ last 0.5 s the base run's profile changes by ${settle_um} um RMS, under the erro
 - **Particle counts**: ${counts[*]} in the half dish are spacings of
   $(g "$P" "$lo" spacing_mm) / $(g "$P" "$mid" spacing_mm) / $(g "$P" "$fine" spacing_mm) mm, the spacings of
   2.5k / 10k / 41k particles in the full dish of examples/dish.toml. The issue's 164k
-  (0.76 mm) was not run: at the measured cost per particle-step it would need about
-  16x the ${fine} run's CPU time (more with the pressure solve's iterations growing),
-  beyond this script's budget on this machine.
+  (0.76 mm, $((4 * fine)) particles in this dish) was not run: growing as from $mid to $fine,
+  it would cost about $(awk -v a="$(g "$P" "$fine" cpu_s_per_sim_s)" -v b="$(g "$P" "$mid" cpu_s_per_sim_s)" -v T="$settle" 'BEGIN { printf "%.0f CPU s per simulated second, %.0f CPU minutes", a * a / b, a * a / b * T / 60 }')
+  for one run (an estimate, not a measurement), beyond this script's budget on this machine.
 
 ### Particle count (\`particles.csv\`, \`particles.png\`; reference: ${fine} particles)
 
@@ -160,13 +160,14 @@ $(csv_md "$T" setting steps cpu_s_per_sim_s cpu_ms_per_step profile_rms_err_mm p
 - **Resolution is the error that matters; the solver knobs are not.** At $(g "$P" "$lo" spacing_mm) mm spacing
   ($lo particles) the heap profile is off by $(g "$P" "$lo" profile_rms_err_mm) mm RMS (rise error
   $(g "$P" "$lo" rise_err_pct) %), at $(g "$P" "$mid" spacing_mm) mm ($mid) by $(g "$P" "$mid" profile_rms_err_mm) mm
-  (rise $(g "$P" "$mid" rise_err_pct) %), against the $(g "$P" "$fine" spacing_mm) mm run; every solver,
+  (rise $(g "$P" "$mid" rise_err_pct) %), against the $(g "$P" "$fine" spacing_mm) mm run; every DFSPH
   tolerance and step-bound setting at ${base} particles stays within
-  $(awk -F, 'FNR > 1 && $8 + 0 > m { m = $8 + 0 } END { printf "%.3f", m }' "$S" "$D" "$T") mm RMS of its reference
-  (the reference rise is $(g "$S" "dfsph 5e-5 max_dt 5e-4 (ref)" rise_mm) mm).
+  $(awk -F, 'FNR > 1 && $8 + 0 > m { m = $8 + 0 } END { printf "%.3f", m }' "$D" "$T") mm RMS of its reference
+  (the reference rise is $(g "$S" "dfsph 5e-5 max_dt 5e-4 (ref)" rise_mm) mm; WCSPH: $(g "$S" wcsph profile_rms_err_mm) mm).
 - **Cost per particle count**: $(g "$P" "$lo" cpu_s_per_sim_s) / $(g "$P" "$mid" cpu_s_per_sim_s) / $(g "$P" "$fine" cpu_s_per_sim_s) CPU s per
-  simulated second for $lo / $mid / $fine particles ($(ratio "$(g "$P" "$fine" cpu_s_per_sim_s)" "$(g "$P" "$mid" cpu_s_per_sim_s)")x for 4x the
-  particles from $mid to $fine: the step count is set by max_dt, not by the spacing, here).
+  simulated second for $lo / $mid / $fine particles: $(ratio "$(g "$P" "$fine" cpu_s_per_sim_s)" "$(g "$P" "$mid" cpu_s_per_sim_s)")x for 4x the
+  particles from $mid to $fine, of which $(ratio "$(g "$P" "$fine" steps)" "$(g "$P" "$mid" steps)")x more steps and $(ratio "$(g "$P" "$fine" cpu_ms_per_step)" "$(g "$P" "$mid" cpu_ms_per_step)")x the CPU per
+  step (4x the particles, and the pressure solve iterates more at the finer spacing).
 - **Pressure solver**: WCSPH takes $(g "$S" wcsph steps) steps against DFSPH's $(g "$S" dfsph steps)
   and costs $(g "$S" wcsph cpu_s_per_sim_s) against $(g "$S" dfsph cpu_s_per_sim_s) CPU s per simulated second,
   with a profile error of $(g "$S" wcsph profile_rms_err_mm) mm RMS against DFSPH's $(g "$S" dfsph profile_rms_err_mm) mm.
