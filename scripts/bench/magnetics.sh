@@ -113,7 +113,7 @@ PLOT_YLOG=1 "$here/plot.sh" "$out/magnetization_solver.csv" cpu_ms_per_solve fie
     "magnetization solver: per-particle field error vs cost (settled heap pool)" || echo "magnetics.sh: plot failed" >&2
 PLOT_YLOG=1 "$here/plot.sh" "$out/opening_angle.csv" cpu_ms_per_solve field_rms_err_pct "$out/opening_angle.png" \
     "tree opening angle: per-particle field error vs cost (settled heap pool)" || echo "magnetics.sh: plot failed" >&2
-"$here/plot.sh" "$out/magnetics_heap.csv" cpu_s_per_sim_s profile_rms_err_mm "$out/magnetics_heap.png" \
+PLOT_YLOG=1 "$here/plot.sh" "$out/magnetics_heap.csv" cpu_s_per_sim_s profile_rms_err_mm "$out/magnetics_heap.png" \
     "magnetics in the simulation: heap profile error vs cost ($count particles)" || echo "magnetics.sh: plot failed" >&2
 
 # --- The Markdown section (numbers from the CSVs; the recommendations are the reading of them).
