@@ -49,22 +49,23 @@ echo "sim.sh: heap pool, settle ${settle} s, particles ${counts[*]}, base $base,
     echo "cfl0.8 fluid.block.0.count=$base sim.cfl=0.8 sim.max_dt=0.002"
 } | sim_batch "$cache" "$settle"
 
-# row NAME REFNAME SETTING: "setting,particles,spacing_mm,steps,cpu_s_per_sim_s,cpu_ms_per_step,
-# wall_s_per_sim_s,profile_rms_err_mm,profile_max_err_mm,centre_height_mm,centre_err_mm,
-# rise_mm,rise_err_pct,rms_speed_mm_s,reference"
-header="setting,particles,spacing_mm,steps,cpu_s_per_sim_s,cpu_ms_per_step,wall_s_per_sim_s,profile_rms_err_mm,profile_max_err_mm,centre_height_mm,centre_err_mm,rise_mm,rise_err_pct,rms_speed_mm_s,reference"
+# row NAME REFNAME SETTING: one CSV row (columns: $header).
+header="setting,particles,spacing_mm,steps,cpu_s_per_sim_s,cpu_ms_per_step,wall_s_per_sim_s,heap_rms_err_mm,heap_max_err_mm,profile_rms_err_mm,profile_max_err_mm,centre_height_mm,centre_err_mm,rise_mm,rise_err_pct,initial_centre_height_mm,rms_speed_mm_s,reference"
 row() {
     local name="$1" ref="$2" setting="$3"
     local s wall cpu steps
-    s="$("$bench_bin/bench-heap-profile" "$(sim_last_frame "$cache" "$name")" --ref "$(sim_last_frame "$cache" "$ref")" --summary)"
+    local f0=("$cache/sim/$name/frames"/particles_0000.ply) r0=("$cache/sim/$ref/frames"/particles_0000.ply)
+    s="$("$bench_bin/bench-heap-profile" "$(sim_last_frame "$cache" "$name")" --ref "$(sim_last_frame "$cache" "$ref")" \
+        --base "${f0[0]}" --ref-base "${r0[0]}" --summary)"
     read -r wall cpu steps <"$cache/sim/$name/cost"
     awk -v setting="$setting" -v n="$(kv "$s" particles)" -v sp="$(kv "$s" spacing_m)" -v steps="$steps" \
         -v cpu="$cpu" -v wall="$wall" -v T="$settle" -v prms="$(kv "$s" profile_rms_err_m)" \
         -v pmax="$(kv "$s" profile_max_err_m)" -v ch="$(kv "$s" centre_height_m)" -v ce="$(kv "$s" centre_err_m)" \
         -v rise="$(kv "$s" rise_m)" -v re="$(kv "$s" rise_err_rel)" -v v="$(kv "$s" rms_speed_m_s)" -v ref="$ref" \
-        'BEGIN { printf "%s,%d,%.3f,%d,%.2f,%.2f,%.1f,%.3f,%.3f,%.3f,%.3f,%.3f,%.1f,%.2f,%s\n",
-                 setting, n, 1e3 * sp, steps, cpu / T, 1e3 * cpu / steps, wall / T, 1e3 * prms, 1e3 * pmax,
-                 1e3 * ch, 1e3 * ce, 1e3 * rise, 100 * re, 1e3 * v, ref }'
+        -v hrms="$(kv "$s" heap_rms_err_m)" -v hmax="$(kv "$s" heap_max_err_m)" -v h0="$(kv "$s" initial_centre_height_m)" \
+        'BEGIN { printf "%s,%d,%.3f,%d,%.2f,%.2f,%.1f,%.3f,%.3f,%.3f,%.3f,%.3f,%.3f,%.3f,%.1f,%.3f,%.2f,%s\n",
+                 setting, n, 1e3 * sp, steps, cpu / T, 1e3 * cpu / steps, wall / T, 1e3 * hrms, 1e3 * hmax,
+                 1e3 * prms, 1e3 * pmax, 1e3 * ch, 1e3 * ce, 1e3 * rise, 100 * re, 1e3 * h0, 1e3 * v, ref }'
 }
 
 {
@@ -95,7 +96,7 @@ row() {
 
 for k in particles pressure_solver density_tolerance max_dt; do
     # Errors span decades: log y (the reference row, error 0, drops out), except the 3-row ladder.
-    PLOT_YLOG=$([[ $k == particles ]] && echo 0 || echo 1) "$here/plot.sh" "$out/$k.csv" cpu_s_per_sim_s profile_rms_err_mm "$out/$k.png" \
+    PLOT_YLOG=$([[ $k == particles ]] && echo 0 || echo 1) "$here/plot.sh" "$out/$k.csv" cpu_s_per_sim_s heap_rms_err_mm "$out/$k.png" \
         "ferro-sim ${k//_/ }: heap profile error vs cost (heap pool, settle $settle s)" || echo "sim.sh: plot of $k failed" >&2
 done
 
@@ -108,7 +109,7 @@ frames=("$cache/sim/p$base/frames"/particles_*.ply)
 settle_um="$("$bench_bin/bench-heap-profile" "${frames[-2]}" --ref "${frames[-1]}" --summary |
     tr ' ' '\n' | sed -n 's/^profile_rms_err_m=//p' | awk '{ printf "%.1f", 1e6 * $1 }')"
 ratio() { awk -v a="$1" -v b="$2" 'BEGIN { printf "%.1f", a / b }'; }
-cols="setting particles spacing_mm steps cpu_s_per_sim_s cpu_ms_per_step profile_rms_err_mm profile_max_err_mm centre_height_mm centre_err_mm rise_mm rise_err_pct rms_speed_mm_s"
+cols="setting particles spacing_mm steps cpu_s_per_sim_s cpu_ms_per_step heap_rms_err_mm heap_max_err_mm profile_rms_err_mm centre_height_mm centre_err_mm rise_mm rise_err_pct initial_centre_height_mm rms_speed_mm_s"
 {
     cat <<MD
 ## Simulation: particle count, pressure solver, density tolerance, time-step bound
@@ -152,31 +153,35 @@ $(csv_md "$P" $cols)
 
 $(csv_md "$S" $cols)
 
-$(csv_md "$D" setting steps cpu_s_per_sim_s cpu_ms_per_step profile_rms_err_mm profile_max_err_mm centre_err_mm rise_err_pct rms_speed_mm_s)
+$(csv_md "$D" setting steps cpu_s_per_sim_s cpu_ms_per_step heap_rms_err_mm heap_max_err_mm centre_err_mm rise_err_pct rms_speed_mm_s)
 
-$(csv_md "$T" setting steps cpu_s_per_sim_s cpu_ms_per_step profile_rms_err_mm profile_max_err_mm centre_err_mm rise_err_pct rms_speed_mm_s)
+$(csv_md "$T" setting steps cpu_s_per_sim_s cpu_ms_per_step heap_rms_err_mm heap_max_err_mm centre_err_mm rise_err_pct rms_speed_mm_s)
 
 ### Findings
 
-- **Resolution is the error that matters; the solver knobs are not.** At $(g "$P" "$lo" spacing_mm) mm spacing
-  ($lo particles) the heap profile is off by $(g "$P" "$lo" profile_rms_err_mm) mm RMS (rise error
-  $(g "$P" "$lo" rise_err_pct) %), at $(g "$P" "$mid" spacing_mm) mm ($mid) by $(g "$P" "$mid" profile_rms_err_mm) mm
-  (rise $(g "$P" "$mid" rise_err_pct) %), against the $(g "$P" "$fine" spacing_mm) mm run; every DFSPH
-  tolerance and step-bound setting at ${base} particles stays within
+- **Resolution is the error that matters; the solver knobs are not.** The heap itself (the
+  displacement h(r) - h_initial(r)) is off the $(g "$P" "$fine" spacing_mm) mm run by $(g "$P" "$lo" heap_rms_err_mm) mm RMS at
+  $(g "$P" "$lo" spacing_mm) mm spacing ($lo particles; rise error $(g "$P" "$lo" rise_err_pct) %) and by $(g "$P" "$mid" heap_rms_err_mm) mm at
+  $(g "$P" "$mid" spacing_mm) mm ($mid; rise $(g "$P" "$mid" rise_err_pct) %); every DFSPH tolerance and step-bound setting at
+  ${base} particles stays within
   $(awk -F, 'FNR > 1 && $8 + 0 > m { m = $8 + 0 } END { printf "%.3f", m }' "$D" "$T") mm RMS of its reference
-  (the reference rise is $(g "$S" "dfsph 5e-5 max_dt 5e-4 (ref)" rise_mm) mm; WCSPH: $(g "$S" wcsph profile_rms_err_mm) mm).
+  (the reference rise is $(g "$S" "dfsph 5e-5 max_dt 5e-4 (ref)" rise_mm) mm; WCSPH: $(g "$S" wcsph heap_rms_err_mm) mm).
+  The absolute surface height differs more ($(g "$P" "$lo" profile_rms_err_mm) / $(g "$P" "$mid" profile_rms_err_mm) mm RMS): a coarser fill of the
+  same block holds less fluid (column height over the centre before anything moves:
+  $(g "$P" "$lo" initial_centre_height_mm) / $(g "$P" "$mid" initial_centre_height_mm) / $(g "$P" "$fine" initial_centre_height_mm) mm for the 10 mm block), so a coarse preview
+  also shows a shallower pool.
 - **Cost per particle count**: $(g "$P" "$lo" cpu_s_per_sim_s) / $(g "$P" "$mid" cpu_s_per_sim_s) / $(g "$P" "$fine" cpu_s_per_sim_s) CPU s per
   simulated second for $lo / $mid / $fine particles: $(ratio "$(g "$P" "$fine" cpu_s_per_sim_s)" "$(g "$P" "$mid" cpu_s_per_sim_s)")x for 4x the
   particles from $mid to $fine, of which $(ratio "$(g "$P" "$fine" steps)" "$(g "$P" "$mid" steps)")x more steps and $(ratio "$(g "$P" "$fine" cpu_ms_per_step)" "$(g "$P" "$mid" cpu_ms_per_step)")x the CPU per
   step (4x the particles, and the pressure solve iterates more at the finer spacing).
 - **Pressure solver**: WCSPH takes $(g "$S" wcsph steps) steps against DFSPH's $(g "$S" dfsph steps)
   and costs $(g "$S" wcsph cpu_s_per_sim_s) against $(g "$S" dfsph cpu_s_per_sim_s) CPU s per simulated second,
-  with a profile error of $(g "$S" wcsph profile_rms_err_mm) mm RMS against DFSPH's $(g "$S" dfsph profile_rms_err_mm) mm.
+  with a heap error of $(g "$S" wcsph heap_rms_err_mm) mm RMS against DFSPH's $(g "$S" dfsph heap_rms_err_mm) mm.
 - **Tolerance and step bound**: DFSPH at 1e-3 costs $(g "$D" 1e-3 cpu_s_per_sim_s), at the default 2e-4
   $(g "$D" 2e-4 cpu_s_per_sim_s), at 5e-5 $(g "$D" 5e-5 cpu_s_per_sim_s) CPU s per simulated second; max_dt 2e-3 s
   $(g "$T" 2e-3 cpu_s_per_sim_s) ($(g "$T" 2e-3 steps) steps), 1e-3 s $(g "$T" 1e-3 cpu_s_per_sim_s), 5e-4 s $(g "$T" 5e-4 cpu_s_per_sim_s)
-  ($(g "$T" 5e-4 steps) steps). Settled-state errors are $(g "$D" 1e-3 profile_rms_err_mm) / $(g "$D" 2e-4 profile_rms_err_mm) / $(g "$D" 5e-5 profile_rms_err_mm) mm
-  and $(g "$T" 2e-3 profile_rms_err_mm) / $(g "$T" 1e-3 profile_rms_err_mm) / $(g "$T" 5e-4 profile_rms_err_mm) mm RMS; the residual RMS speeds
+  ($(g "$T" 5e-4 steps) steps). Settled-state errors are $(g "$D" 1e-3 heap_rms_err_mm) / $(g "$D" 2e-4 heap_rms_err_mm) / $(g "$D" 5e-5 heap_rms_err_mm) mm
+  and $(g "$T" 2e-3 heap_rms_err_mm) / $(g "$T" 1e-3 heap_rms_err_mm) / $(g "$T" 5e-4 heap_rms_err_mm) mm RMS; the residual RMS speeds
   ($(g "$D" 1e-3 rms_speed_mm_s) / $(g "$D" 2e-4 rms_speed_mm_s) / $(g "$D" 5e-5 rms_speed_mm_s) mm/s) say how still each pool is.
 MD
     cat <<MD
@@ -188,10 +193,10 @@ For \`scripts/presets.conf\`. The particle count is a property of the scene (its
 
 | key | preview | final | large | why (numbers above) |
 |---|---|---|---|---|
-| particle spacing (\`fluid.spacing\` or the blocks' \`count\`) | 1.9 mm (10k in the paper's dish) | 1.2 mm (41k, the paper's) | 1.2 mm | 1.9 mm: heap profile $(g "$P" "$mid" profile_rms_err_mm) mm RMS off the 1.2 mm run (rise $(g "$P" "$mid" rise_err_pct) %) for 1/$(ratio "$(g "$P" "$fine" cpu_s_per_sim_s)" "$(g "$P" "$mid" cpu_s_per_sim_s)") of the cost; 3 mm: $(g "$P" "$lo" profile_rms_err_mm) mm (rise $(g "$P" "$lo" rise_err_pct) %), too coarse even for a preview of a 1 cm layer |
-| \`sim.solver\` | dfsph | dfsph | dfsph | WCSPH costs about the same per simulated second ($(g "$S" wcsph cpu_s_per_sim_s) vs $(g "$S" dfsph cpu_s_per_sim_s) CPU s) with $(ratio "$(g "$S" wcsph steps)" "$(g "$S" dfsph steps)")x the steps, and its heap is $(g "$S" wcsph profile_rms_err_mm) mm RMS off (rise $(g "$S" wcsph rise_err_pct) %) against DFSPH's $(g "$S" dfsph profile_rms_err_mm) mm |
-| \`sim.max_density_error\` | 1e-3 | 2e-4 | 1e-3 | 1e-3 costs 1/$(ratio "$(g "$D" 2e-4 cpu_s_per_sim_s)" "$(g "$D" 1e-3 cpu_s_per_sim_s)") of the default with the same settled heap ($(g "$D" 1e-3 profile_rms_err_mm) mm RMS), but the pool keeps $(g "$D" 1e-3 rms_speed_mm_s) mm/s RMS instead of $(g "$D" 2e-4 rms_speed_mm_s): final frames of a pool that must stand still keep 2e-4 (the default, issue 13); a large shot whose fluid moves anyway takes 1e-3 |
-| \`sim.max_dt\` [s] | 1e-3 | 1e-3 | 1e-3 | 2e-3 takes $(g "$T" 2e-3 steps) steps, as many as 1e-3 ($(g "$T" 1e-3 steps)): under a strong magnet another bound sets the step (the force criterion 0.25 sqrt(h/\|a\|) of FluidSimulation); 5e-4 costs $(ratio "$(g "$T" 5e-4 cpu_s_per_sim_s)" "$(g "$T" 1e-3 cpu_s_per_sim_s)")x for no gain ($(g "$T" 5e-4 profile_rms_err_mm) mm) |
+| particle spacing (\`fluid.spacing\` or the blocks' \`count\`) | 1.9 mm (10k in the paper's dish) | 1.2 mm (41k, the paper's) | 1.2 mm | 1.9 mm: heap $(g "$P" "$mid" heap_rms_err_mm) mm RMS off the 1.2 mm run (rise $(g "$P" "$mid" rise_err_pct) %) for 1/$(ratio "$(g "$P" "$fine" cpu_s_per_sim_s)" "$(g "$P" "$mid" cpu_s_per_sim_s)") of the cost; 3 mm: $(g "$P" "$lo" heap_rms_err_mm) mm (rise $(g "$P" "$lo" rise_err_pct) %) and a pool $(awk -v a="$(g "$P" "$fine" initial_centre_height_mm)" -v b="$(g "$P" "$lo" initial_centre_height_mm)" 'BEGIN { printf "%.1f", a - b }') mm shallower (its fill holds less fluid): too coarse for a 1 cm layer |
+| \`sim.solver\` | dfsph | dfsph | dfsph | WCSPH costs about the same per simulated second ($(g "$S" wcsph cpu_s_per_sim_s) vs $(g "$S" dfsph cpu_s_per_sim_s) CPU s) with $(ratio "$(g "$S" wcsph steps)" "$(g "$S" dfsph steps)")x the steps, and its heap is $(g "$S" wcsph heap_rms_err_mm) mm RMS off (rise $(g "$S" wcsph rise_err_pct) %) against DFSPH's $(g "$S" dfsph heap_rms_err_mm) mm |
+| \`sim.max_density_error\` | 1e-3 | 2e-4 | 1e-3 | 1e-3 costs 1/$(ratio "$(g "$D" 2e-4 cpu_s_per_sim_s)" "$(g "$D" 1e-3 cpu_s_per_sim_s)") of the default with the same settled heap ($(g "$D" 1e-3 heap_rms_err_mm) mm RMS), but the pool keeps $(g "$D" 1e-3 rms_speed_mm_s) mm/s RMS instead of $(g "$D" 2e-4 rms_speed_mm_s): final frames of a pool that must stand still keep 2e-4 (the default, issue 13); a large shot whose fluid moves anyway takes 1e-3 |
+| \`sim.max_dt\` [s] | 1e-3 | 1e-3 | 1e-3 | 2e-3 takes $(g "$T" 2e-3 steps) steps, as many as 1e-3 ($(g "$T" 1e-3 steps)): under a strong magnet another bound sets the step (the force criterion 0.25 sqrt(h/\|a\|) of FluidSimulation); 5e-4 costs $(ratio "$(g "$T" 5e-4 cpu_s_per_sim_s)" "$(g "$T" 1e-3 cpu_s_per_sim_s)")x for no gain ($(g "$T" 5e-4 heap_rms_err_mm) mm) |
 | \`sim.cfl\` | 0.4 | 0.4 | 0.4 | 0.8 (with max_dt 2e-3): $(g "$T" "2e-3 cfl 0.8" steps) steps, $(g "$T" "2e-3 cfl 0.8" cpu_s_per_sim_s) CPU s per simulated second: no saving on this scene |
 MD
 } >"$out/sim.md"

@@ -2,7 +2,7 @@
 // against a reference run's file (scripts/bench/sim.sh, scripts/bench/magnetics.sh).
 //
 //   build/bin/bench-heap-profile FILE [--ref REF_FILE] [--bins 20] [--rmax R] [--width W]
-//                                [--centre X,Y] [--summary]
+//                                [--centre X,Y] [--base FILE0 --ref-base REF0] [--summary]
 //
 // The surface height is measured as the fluid's column height h(r): the particles' volume
 // (particle_mass / rest_density each, from the file's comments; spacing^3 without them) per unit floor
@@ -18,8 +18,12 @@
 // Prints the profile (r, h) and a summary: centre height h(0) (the settled surface height over
 // the magnet), edge height h(rmax), rise = h(0) - h(rmax), RMS and largest particle speed.
 // With --ref: the profile error (RMS and largest |h - h_ref| over the bins), the centre height
-// error and the rise error relative to the reference rise. --summary prints only one line of
-// key=value pairs (what the scripts parse).
+// error and the rise error relative to the reference rise. With --base and --ref-base (each
+// run's initial frame) also the error of the heap itself, the displacement profile
+// h(r) - h_initial(r) against the reference's (heap_rms_err_m, heap_max_err_m): runs at
+// different particle counts start from fills that hold slightly different volumes (a coarse
+// fill stays further from the walls), and this error leaves that offset out. --summary prints
+// only one line of key=value pairs (what the scripts parse).
 #include "sim/core/Constants.hpp"
 #include "sim/core/ParticleFile.hpp"
 
@@ -96,7 +100,7 @@ Profile profileOf(const std::string& path, Options& opt) {
 
 int usage() {
     std::fprintf(stderr, "usage: bench-heap-profile FILE [--ref REF_FILE] [--bins N] [--rmax R] [--width W] "
-                         "[--centre X,Y] [--summary]\n");
+                         "[--centre X,Y] [--base FILE0 --ref-base REF0] [--summary]\n");
     return 2;
 }
 
@@ -104,13 +108,15 @@ int usage() {
 
 int main(int argc, char** argv) {
     Options opt;
-    std::string file, ref;
+    std::string file, ref, base, refBase;
     bool summary = false;
     for (int i = 1; i < argc; ++i) {
         const std::string a = argv[i];
         const bool more = i + 1 < argc;
         if (a == "--summary") summary = true;
         else if (a == "--ref" && more) ref = argv[++i];
+        else if (a == "--base" && more) base = argv[++i];
+        else if (a == "--ref-base" && more) refBase = argv[++i];
         else if (a == "--bins" && more) opt.bins = std::atoi(argv[++i]);
         else if (a == "--rmax" && more) opt.rmax = std::atof(argv[++i]);
         else if (a == "--width" && more) opt.width = std::atof(argv[++i]);
@@ -120,6 +126,7 @@ int main(int argc, char** argv) {
         else return usage();
     }
     if (file.empty() || opt.bins < 1 || !(opt.width > 0)) return usage();
+    if (base.empty() != refBase.empty() || (!base.empty() && ref.empty())) return usage();
     try {
         // The reference fixes rmax, so both profiles are sampled at the same radii.
         Profile pr;
@@ -150,6 +157,17 @@ int main(int argc, char** argv) {
                         "rise_err_rel=%.4g",
                         std::sqrt(s2 / double(p.h.size())), worst, centre - pr.h.front(), refRise,
                         refRise != 0 ? (rise - refRise) / std::abs(refRise) : 0.0);
+            if (!base.empty()) {
+                const Profile p0 = profileOf(base, opt), pr0 = profileOf(refBase, opt);
+                double h2 = 0, hWorst = 0;
+                for (size_t b = 0; b < p.h.size(); ++b) {
+                    const double d = (p.h[b] - p0.h[b]) - (pr.h[b] - pr0.h[b]);
+                    h2 += d * d;
+                    hWorst = std::max(hWorst, std::abs(d));
+                }
+                std::printf(" initial_centre_height_m=%.6g heap_rms_err_m=%.4g heap_max_err_m=%.4g", p0.h.front(),
+                            std::sqrt(h2 / double(p.h.size())), hWorst);
+            }
         }
         std::printf("\n");
     } catch (const std::exception& e) {
