@@ -19,6 +19,7 @@
 set -euo pipefail
 here="$(cd "$(dirname "$0")" && pwd)"
 source "$here/sim-lib.sh"
+[[ $# -le 1 ]] || { echo "magnetics.sh: error: usage: scripts/bench/magnetics.sh [OUT_DIR]" >&2; exit 2; }
 out="${1:-$bench_root/tests/bench/report}"
 mkdir -p "$out/cache"
 out="$(cd "$out" && pwd)"
@@ -139,6 +140,8 @@ n1=${field_counts[0]} n2=${field_counts[-1]}
   \`external\` is the simulation section's base run. \`solves\` counts the self-consistent
   re-solves over the run (the default rule re-solves when the magnets or the fluid have
   moved enough to change the field by more than the tolerance).
+- **Budget**: the simulations of this section take $(cat "$cache"/sim/m${count}_*/cost 2>/dev/null | awk '{ c += $2 } END { printf "%.0f", c }') CPU s in all (the
+  \`external\` run is the simulation section's); the field benchmarks a few seconds.
 
 ### Magnetization solver (\`magnetization_solver.csv\`, \`magnetization_solver.png\`; reference: direct, same particles)
 

@@ -77,7 +77,8 @@ sim_batch() {
         sim_run "$cache" "$name" "$settle" $rest &
     done
     while (($(jobs -rp | wc -l) > 0)); do wait -n || failed=1; done
-    return $failed
+    # A failed run: exit code 3 (run failed) for the area script.
+    return $((failed ? 3 : 0))
 }
 
 # One row's numbers from bench-heap-profile --summary: value of KEY in the line.

@@ -20,6 +20,7 @@
 set -euo pipefail
 here="$(cd "$(dirname "$0")" && pwd)"
 source "$here/sim-lib.sh"
+[[ $# -le 1 ]] || { echo "sim.sh: error: usage: scripts/bench/sim.sh [OUT_DIR]" >&2; exit 2; }
 out="${1:-$bench_root/tests/bench/report}"
 mkdir -p "$out/cache"
 out="$(cd "$out" && pwd)"
@@ -144,6 +145,8 @@ last 0.5 s the base run's profile changes by ${settle_um} um RMS, under the erro
   (0.76 mm, $((4 * fine)) particles in this dish) was not run: growing as from $mid to $fine,
   it would cost about $(awk -v a="$(g "$P" "$fine" cpu_s_per_sim_s)" -v b="$(g "$P" "$mid" cpu_s_per_sim_s)" -v T="$settle" 'BEGIN { printf "%.0f CPU s per simulated second, %.0f CPU minutes", a * a / b, a * a / b * T / 60 }')
   for one run (an estimate, not a measurement), beyond this script's budget on this machine.
+- **Budget**: the runs of this section take $(cat "$cache"/sim/{p*,refB,wcsph,tol*,dt*,cfl*}/cost 2>/dev/null | awk '{ c += $2; if ($2 > m) m = $2 } END { w = c / 2 > m ? c / 2 : m; printf "%.0f CPU s in all, the longest run %.0f: two runs at a time on an idle 2-core machine, about %.0f min", c, m, w / 60 }')
+  (this report was made on the shared machine, where it took much longer). Cached runs are not redone.
 
 ### Particle count (\`particles.csv\`, \`particles.png\`; reference: ${fine} particles)
 
