@@ -48,6 +48,9 @@ echo "sim.sh: heap pool, settle ${settle} s, particles ${counts[*]}, base $base,
     echo "dt2e-3 fluid.block.0.count=$base sim.max_dt=0.002"
     echo "dt5e-4 fluid.block.0.count=$base sim.max_dt=0.0005"
     echo "cfl0.8 fluid.block.0.count=$base sim.cfl=0.8 sim.max_dt=0.002"
+    # The cheapest run twice more: how much the CPU time of one run varies on this machine.
+    echo "p${counts[0]}_rep1 fluid.block.0.count=${counts[0]}"
+    echo "p${counts[0]}_rep2 fluid.block.0.count=${counts[0]}"
 } | sim_batch "$cache" "$settle"
 
 # row NAME REFNAME SETTING: one CSV row (columns: $header).
@@ -145,6 +148,8 @@ last 0.5 s the base run's profile changes by ${settle_um} um RMS, under the erro
   (0.76 mm, $((4 * fine)) particles in this dish) was not run: growing as from $mid to $fine,
   it would cost about $(awk -v a="$(g "$P" "$fine" cpu_s_per_sim_s)" -v b="$(g "$P" "$mid" cpu_s_per_sim_s)" -v T="$settle" 'BEGIN { printf "%.0f CPU s per simulated second, %.0f CPU minutes", a * a / b, a * a / b * T / 60 }')
   for one run (an estimate, not a measurement), beyond this script's budget on this machine.
+- **Cost noise**: the ${counts[0]}-particle run three times took $(cat "$cache"/sim/p${counts[0]}{,_rep1,_rep2}/cost | awk '{ c[NR] = $2; if (NR == 1 || $2 < lo) lo = $2; if ($2 > hi) hi = $2 } END { printf "%.2f / %.2f / %.2f CPU s (spread %.0f %% of the least)", c[1], c[2], c[3], 100 * (hi - lo) / lo }'): cost
+  differences of that order between rows are noise.
 - **Budget**: the runs of this section take $(cat "$cache"/sim/{p*,refB,wcsph,tol*,dt*,cfl*}/cost 2>/dev/null | awk '{ c += $2; if ($2 > m) m = $2 } END { w = c / 2 > m ? c / 2 : m; printf "%.0f CPU s in all, the longest run %.0f: two runs at a time on an idle 2-core machine, about %.0f min", c, m, w / 60 }')
   (this report was made on the shared machine, where it took much longer). Cached runs are not redone.
 
