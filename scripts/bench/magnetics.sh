@@ -129,7 +129,8 @@ n1=${field_counts[0]} n2=${field_counts[-1]}
 (\`scripts/bench/heap_pool.toml\`, a 3 A m^2 dipole 2 cm under a 1 cm pool, chi0 1.5, Ms 35 kA/m).
 
 - **Field error** (\`bench-magnetization --particles\`, tests/bench/bench_magnetization.cpp): the
-  settled particle sets of the simulation section ($n1 and $n2 particles: real, disordered SPH
+  settled particle sets of the simulation section (the last frames of its \`external\` runs at
+  $n1 and $n2 particles: real, disordered SPH
   positions, the heap over the magnet), one cold solve per solver (smoothed dipoles, the
   default particle model, tolerance 0.01), against the direct (all pairs) solve on the same
   particles: per-particle |H - H_direct| as relative RMS over all particles and the worst
