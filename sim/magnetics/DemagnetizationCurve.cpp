@@ -16,7 +16,8 @@ double DemagnetizationCurve::nodePosition(double h) const {
     return std::clamp((std::log(h) - logLow_) / logSpan_ * double(nodes_ - 1), 0.0, double(nodes_ - 1));
 }
 
-void DemagnetizationCurve::fit(const std::vector<double>& h, const std::vector<double>& mAlong) {
+void DemagnetizationCurve::fit(const std::vector<double>& h, const std::vector<double>& mAlong,
+                               const std::vector<SurfaceSample>& surface) {
     fitted_ = true;
     residual_ = 0;
     r_.assign(size_t(nodes_), 1.0);
@@ -35,37 +36,70 @@ void DemagnetizationCurve::fit(const std::vector<double>& h, const std::vector<d
     // A field of one strength everywhere (a uniform magnet) is one node's worth of data.
     logSpan_ = std::max(std::log(hi) - logLow_, 1e-9);
 
-    // Least squares: minimise sum_i (m_i - r(h_i) M_law(h_i))^2 over the node values, r a
-    // sum of hat functions (tridiagonal normal equations), plus a vanishing first-difference
-    // penalty (1e-9 of the mean diagonal) that only decides nodes without particles: linear
-    // between fitted nodes, constant beyond the ends.
-    Eigen::MatrixXd A = Eigen::MatrixXd::Zero(nodes_, nodes_);
-    Eigen::VectorXd y = Eigen::VectorXd::Zero(nodes_);
+    tabulate();
+    // Least squares over the node values r_b and a constant C:
+    //   volume rows   m_i - r(h_i) M_law(h_i)                 (r a sum of hat functions),
+    //   surface rows  G(h_s) - C - P_s,  G = sum_b r_b Phi_b  (the potential, linear in r),
+    // each group normalised by its own RMS and total weight, the volume rows at a tenth of
+    // the surface rows' weight when there are surface samples (they decide only what the
+    // surface does not), plus a vanishing first-difference penalty (1e-9 of the mean
+    // diagonal) that decides nodes without data: linear between fitted nodes, constant
+    // beyond the ends.
+    const int K = nodes_;
+    Eigen::MatrixXd A = Eigen::MatrixXd::Zero(K + 1, K + 1);
+    Eigen::VectorXd y = Eigen::VectorXd::Zero(K + 1);
+    double volumeWeight = 0, m2 = 0;
+    for (size_t i = 0; i < n; ++i)
+        if (usable(i)) {
+            volumeWeight += 1;
+            m2 += mAlong[i] * mAlong[i];
+        }
+    double surfaceWeight = 0, p2 = 0;
+    for (const SurfaceSample& q : surface)
+        if (q.weight > 0 && q.h > 0 && std::isfinite(q.h) && std::isfinite(q.pressure)) {
+            surfaceWeight += q.weight;
+            p2 += q.weight * q.pressure * q.pressure;
+        }
+    const bool useSurface = surfaceWeight > 0 && p2 > 0;
+    const double volumeScale = (useSurface ? 0.1 : 1.0) / (volumeWeight * std::max(m2 / volumeWeight, 1e-300));
     for (size_t i = 0; i < n; ++i) {
         if (!usable(i)) continue;
         const double law = langevinMagnetization(h[i], chi0_, Ms_);
         const double u = nodePosition(h[i]);
-        const int b = std::min(int(u), nodes_ - 2);
+        const int b = std::min(int(u), K - 2);
         const double f = u - double(b);
         const double w0 = (1 - f) * law, w1 = f * law;
-        A(b, b) += w0 * w0;
-        A(b, b + 1) += w0 * w1;
-        A(b + 1, b) += w0 * w1;
-        A(b + 1, b + 1) += w1 * w1;
-        y(b) += w0 * mAlong[i];
-        y(b + 1) += w1 * mAlong[i];
+        A(b, b) += volumeScale * w0 * w0;
+        A(b, b + 1) += volumeScale * w0 * w1;
+        A(b + 1, b) += volumeScale * w0 * w1;
+        A(b + 1, b + 1) += volumeScale * w1 * w1;
+        y(b) += volumeScale * w0 * mAlong[i];
+        y(b + 1) += volumeScale * w1 * mAlong[i];
     }
-    const double scale = A.trace() / double(nodes_);
+    if (useSurface) {
+        const double surfaceScale = 1.0 / p2;   // sum of w P^2 normalised to 1
+        Eigen::VectorXd row(K + 1);
+        for (const SurfaceSample& q : surface) {
+            if (!(q.weight > 0 && q.h > 0 && std::isfinite(q.h) && std::isfinite(q.pressure))) continue;
+            const std::vector<double> phi = basisIntegrals(q.h);
+            for (int b = 0; b < K; ++b) row(b) = phi[size_t(b)];
+            row(K) = -1;
+            A.noalias() += surfaceScale * q.weight * row * row.transpose();
+            y.noalias() += surfaceScale * q.weight * q.pressure * row;
+        }
+    }
+    const double scale = A.topLeftCorner(K, K).trace() / double(K);
     if (!(scale > 0)) return;
     const double lambda = 1e-9 * scale;
-    for (int b = 0; b + 1 < nodes_; ++b) {
+    for (int b = 0; b + 1 < K; ++b) {
         A(b, b) += lambda;
         A(b + 1, b + 1) += lambda;
         A(b, b + 1) -= lambda;
         A(b + 1, b) -= lambda;
     }
+    A(K, K) += lambda;   // C is free only with surface rows
     const Eigen::VectorXd r = A.ldlt().solve(y);
-    for (int b = 0; b < nodes_; ++b) r_[size_t(b)] = std::isfinite(r(b)) ? std::max(0.0, r(b)) : 1.0;
+    for (int b = 0; b < K; ++b) r_[size_t(b)] = std::isfinite(r(b)) ? std::max(0.0, r(b)) : 1.0;
     double miss2 = 0, total2 = 0;
     for (size_t i = 0; i < n; ++i) {
         if (!usable(i)) continue;
@@ -86,6 +120,54 @@ double DemagnetizationCurve::ratio(double h) const {
 
 double DemagnetizationCurve::magnetization(double h) const {
     return ratio(h) * langevinMagnetization(h, chi0_, Ms_);
+}
+
+} // namespace ferro
+
+namespace ferro {
+
+void DemagnetizationCurve::tabulate() {
+    // Cumulative integrals of hat_b(log h) M_law(h) dh from the lowest node on, on a grid of
+    // fine_ steps per node interval (trapezoid rule in t = log h, dh = h dt).
+    const int K = nodes_, steps = (K - 1) * fine_;
+    table_.assign(size_t(steps + 1) * size_t(K), 0.0);
+    const double dt = logSpan_ / double(steps);
+    auto integrand = [&](int g, int b) {
+        const double t = logLow_ + dt * double(g), hh = std::exp(t);
+        const double u = double(g) / double(fine_);
+        const double hat = std::max(0.0, 1 - std::abs(u - double(b)));
+        return hat * langevinMagnetization(hh, chi0_, Ms_) * hh;
+    };
+    for (int g = 1; g <= steps; ++g)
+        for (int b = 0; b < K; ++b)
+            table_[size_t(g) * size_t(K) + size_t(b)] =
+                table_[size_t(g - 1) * size_t(K) + size_t(b)] + 0.5 * dt * (integrand(g - 1, b) + integrand(g, b));
+}
+
+std::vector<double> DemagnetizationCurve::basisIntegrals(double h) const {
+    const int K = nodes_, steps = (K - 1) * fine_;
+    std::vector<double> phi(size_t(K), 0.0);
+    const double low = std::exp(logLow_), high = std::exp(logLow_ + logSpan_);
+    // Below the lowest node only hat_0 (held at 1) contributes: F_law up to h.
+    phi[0] = langevinEnergy(std::min(h, low), chi0_, Ms_);
+    if (!(h > low) || table_.empty()) return phi;
+    const double g = std::min((std::log(h) - logLow_) / logSpan_ * double(steps), double(steps));
+    const int g0 = std::min(int(g), steps - 1);
+    const double f = g - double(g0);
+    for (int b = 0; b < K; ++b)
+        phi[size_t(b)] += (1 - f) * table_[size_t(g0) * size_t(K) + size_t(b)] + f * table_[size_t(g0 + 1) * size_t(K) + size_t(b)];
+    // Beyond the highest node only hat_{K-1} (held at 1): F_law from there to h.
+    if (h > high) phi[size_t(K - 1)] += langevinEnergy(h, chi0_, Ms_) - langevinEnergy(high, chi0_, Ms_);
+    return phi;
+}
+
+double DemagnetizationCurve::potential(double h) const {
+    if (!(h > 0)) return 0.0;
+    if (!fitted_ || table_.empty()) return ratio(h) * langevinEnergy(h, chi0_, Ms_);
+    const std::vector<double> phi = basisIntegrals(h);
+    double G = 0;
+    for (int b = 0; b < nodes_; ++b) G += r_[size_t(b)] * phi[size_t(b)];
+    return G;
 }
 
 } // namespace ferro

@@ -20,9 +20,16 @@
 // term mu0 M_n^2 / 2; tests/sim/sph/test_FluidMagnetics.cpp checks a resting pool against
 // it) and drops only the part of M_i that varies between particles at equal h.
 //
-// The fit: least squares of the particles' M along the applied field against r(h) M_law(h),
-// r piecewise linear in log h on K nodes evenly spaced between the smallest and largest h of
-// the solve, constant beyond them; nodes without particles are linear between fitted ones.
+// The fit: r piecewise linear in log h on K nodes evenly spaced between the smallest and
+// largest h of the solve, constant beyond them. Least squares of two kinds of rows: each
+// particle's M along the applied field against r(h) M_law(h), and, given surface samples,
+// the potential G(h_s) = integral_0^h_s r M_law dh against the ferrohydrostatic surface
+// pressure F(H) + M_n^2 / 2 of the solve's free-surface particles, up to a free constant. In
+// an incompressible fluid a potential body force only shifts the pressure, so what shapes the
+// free surface is G along it; matching G to the surface pressure makes a resting surface the
+// ferrohydrostatic one (measured: 14-17 % of the centre rise off the law on 2,560-particle
+// pools, against 15-24 % with the volume rows alone; the volume rows still decide the field
+// strengths the surface does not reach). Nodes without data are linear between fitted ones.
 // Deterministic (sequential sums in the given order).
 #include <vector>
 
@@ -35,10 +42,26 @@ public:
     /// Susceptibility chi0 [-] and saturation Ms [A/m] of the Langevin law (Ms = 0: linear).
     DemagnetizationCurve(double chi0 = 0, double Ms = 0, int nodes = kDefaultNodes);
 
+    /// A free-surface sample: the applied field strength h [A/m] there, the magnetic surface
+    /// pressure P = F(|H|) + M_n^2 / 2 [A^2/m^2] of the ferrohydrostatic Bernoulli law (H and
+    /// M just inside the surface, M_n the normal component; times mu0 it is in Pa) and a
+    /// weight >= 0 (how surely the particle is a surface particle).
+    struct SurfaceSample {
+        double h = 0, pressure = 0, weight = 0;
+    };
+
     /// Fits r from the particles' applied field strengths `h` [A/m] and the components of
     /// their magnetization along the applied field `mAlong` [A/m] (same length). Particles
     /// with h <= 0 or non-finite values are ignored; with none left, r = 1 everywhere.
-    void fit(const std::vector<double>& h, const std::vector<double>& mAlong);
+    /// With `surface` samples the fit also asks the force's potential G(h) = integral_0^h
+    /// M_f dh' to equal the surface pressure P up to a constant at every sample, so that a
+    /// surface at rest in the force's potential is the ferrohydrostatic surface
+    /// rho g z_s = mu0 P + C; where the surface has no samples (the field strengths it does
+    /// not reach) the volume data decides.
+    void fit(const std::vector<double>& h, const std::vector<double>& mAlong,
+             const std::vector<SurfaceSample>& surface = {});
+    /// G(h) = integral_0^h M_f(h') dh' [A^2/m^2]: mu0 G / rho0 is the body force's potential.
+    double potential(double h) const;
 
     /// True once fit() has been called.
     bool fitted() const { return fitted_; }
@@ -52,6 +75,11 @@ public:
 
 private:
     double nodePosition(double h) const;
+    /// Phi_b(h) = integral_0^h hat_b(h') M_law(h') dh' for every node b (G = sum r_b Phi_b).
+    std::vector<double> basisIntegrals(double h) const;
+    void tabulate();
+    std::vector<double> table_;   // cumulative basis integrals on a fine log-h grid, row-major
+    int fine_ = 32;               // grid steps per node interval
     double chi0_, Ms_;
     int nodes_;
     double logLow_ = 0, logSpan_ = 1;

@@ -168,7 +168,21 @@ void FluidMagnetics::solve(const std::vector<Vec3>& x, bool forced) {
             h[i] = he.norm();
             along[i] = h[i] > 0 ? M_[i].cast<double>().dot(he) / h[i] : 0.0;
         });
-        curve_.fit(h, along);
+        // The free surface as the solve saw it: its pressure F(H) + M_n^2 / 2 (the
+        // ferrohydrostatic Bernoulli law's magnetic side) against the applied field there.
+        // Top-layer particles (surface weight ~1/2) count, deeper ones (~0.1) hardly.
+        std::vector<DemagnetizationCurve::SurfaceSample> surface;
+        const std::vector<Real>& w = solver_->surfaceWeight();
+        const std::vector<Vec3>& normal = solver_->surfaceNormal();
+        if (w.size() == n && normal.size() == n)
+            for (size_t i = 0; i < n; ++i) {
+                const double weight = double(w[i]) - 0.2;
+                if (!(weight > 0) || !(h[i] > 0)) continue;
+                const double mn = M_[i].cast<double>().dot(normal[i].cast<double>());
+                const double p = langevinEnergy(H_[i].cast<double>().norm(), law_.susceptibility, law_.saturation) + 0.5 * mn * mn;
+                surface.push_back({h[i], p, weight});
+            }
+        curve_.fit(h, along, surface);
     }
     HextSolved_ = Hext_;
     extSolved2_ = deterministicSum(n, [&](size_t i) { return double(Hext_[i].squaredNorm()); });

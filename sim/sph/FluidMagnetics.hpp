@@ -24,11 +24,11 @@
 //   solver M in the force is the solve's DemagnetizationCurve, M_f(|H_magnets|): the
 //   demagnetized M as a function of the applied field's strength, so the force stays the
 //   gradient mu0 grad G(|H_magnets|) / rho0 and a pool can rest (each particle's own M made
-//   it a curl force that stirred the pool forever: DemagnetizationCurve.hpp). The layer's
-//   demagnetization it carries is what makes the heap obey the ferrohydrostatic Bernoulli
-//   law rho g z_s = mu0 (F(H) + M_n^2 / 2) + C with the surface's own H and M_n
-//   (tests/sim/app/test_ferrohydrostatics.cpp): for a layer magnetized across it,
-//   M_law(H_in) grad|H_magnets| integrates to exactly that law.
+//   it a curl force that stirred the pool forever: DemagnetizationCurve.hpp). The curve is
+//   fitted so that G along the free surface is the ferrohydrostatic surface pressure
+//   F(H) + M_n^2 / 2 of the solve's own surface particles (normal traction included): a
+//   resting surface then obeys the Bernoulli law rho g z_s = mu0 (F(H) + M_n^2 / 2) + C
+//   (tests/sim/sph/test_FluidMagnetics.cpp checks it on resting pools).
 // - magnetization.force = "surface" (experimental): the Kelvin force density of the TOTAL
 //   field, mu0 (M . grad) H, is for M parallel to H and curl H = 0 exactly grad(mu0 F(H))
 //   (Rosensweig, Ferrohydrodynamics, ch. 5); across the free surface the same density,

@@ -72,3 +72,43 @@ TEST_CASE("a uniform field, nodes without particles and unusable input", "[magne
     REQUIRE(curve.ratio(1e4) == 1.0);
     REQUIRE(curve.residual() == 0.0);
 }
+
+TEST_CASE("surface samples make the force's potential the surface pressure up to a constant", "[magnetics][demagnetization]") {
+    // Surface pressures from a known ratio r_s(h) (0.3 .. 0.7 in log h) and a constant offset;
+    // volume data that says otherwise (r = 1), at the tenth of the weight the fit gives it.
+    // Over the surface's range of h the fitted potential follows the surface,
+    // G(h2) - G(h1) = P(h2) - P(h1), within 6 % of its range (the volume rows' pull).
+    const double chi0 = 1.5, Ms = 35000, lo = 2e3, hi = 5e4;
+    auto rs = [&](double h) { return 0.3 + 0.4 * std::log(h / lo) / std::log(hi / lo); };
+    DemagnetizationCurve exact(chi0, Ms);
+    {   // the potential of r_s itself, as the reference
+        std::vector<double> h, m;
+        for (int i = 0; i <= 2000; ++i) {
+            h.push_back(lo * std::pow(hi / lo, i / 2000.0));
+            m.push_back(rs(h.back()) * langevinMagnetization(h.back(), chi0, Ms));
+        }
+        exact.fit(h, m);
+    }
+    std::vector<double> h, m;
+    std::vector<DemagnetizationCurve::SurfaceSample> surface;
+    for (int i = 0; i <= 400; ++i) {
+        const double v = lo * std::pow(hi / lo, i / 400.0);
+        h.push_back(v);
+        m.push_back(langevinMagnetization(v, chi0, Ms));   // r = 1 in the volume
+        surface.push_back({v, exact.potential(v) + 1234.5, 1.0});
+    }
+    DemagnetizationCurve curve(chi0, Ms);
+    curve.fit(h, m, surface);
+    const double range = exact.potential(hi) - exact.potential(lo);
+    for (double v : {3e3, 8e3, 2e4, 5e4}) {
+        CAPTURE(v);
+        REQUIRE(curve.potential(v) - curve.potential(lo) == Approx(exact.potential(v) - exact.potential(lo)).margin(0.1 * range));
+    }
+    // The surface rows decide: the volume rows alone give r = 1 and another potential.
+    DemagnetizationCurve volumeOnly(chi0, Ms);
+    volumeOnly.fit(h, m);
+    REQUIRE(std::abs((volumeOnly.potential(hi) - volumeOnly.potential(lo)) - range) > 0.5 * range);
+    // potential() is the integral of magnetization(): a central difference of G is M_f.
+    for (double v : {4e3, 3e4}) REQUIRE((curve.potential(v * 1.001) - curve.potential(v / 1.001)) / (v * 1.001 - v / 1.001) ==
+                                        Approx(curve.magnetization(v)).epsilon(1e-2));
+}

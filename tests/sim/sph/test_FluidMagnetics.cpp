@@ -586,16 +586,16 @@ solver = ")" + c.magnetization + R"("
         // the particles' own H and M at the surface (the traction term mu0 M_n^2 / 2 included).
         // Before the body force's M became a function of |H_magnets| (DemagnetizationCurve),
         // this pool never rested (2.7 mm/s RMS, a convection roll) and a smaller pool's surface
-        // was off the law by 40-70 % of the centre rise. Measured now (this pool, 2 s): worst
-        // deviation 15 % (chi0 0.5), 22 % (1.5, DFSPH), 24 % (1.5, WCSPH), a smooth trend from
-        // the axis outward: the force's potential is the law exactly only where the field
-        // crosses the layer normally, and the field here turns oblique toward the wall.
-        // The 10 % is not reached.
+        // was off the law by 40-70 % of the centre rise. Measured now (this pool, 2 s): RMS
+        // speed 0.42-0.49 mm/s; worst deviation from the law 17 % (chi0 0.5), 14 % (1.5,
+        // DFSPH), 15 % (1.5, WCSPH) of the centre rise (with the curve fitted to the volume
+        // alone 15-24 %, a smooth trend from the axis outward). The 10 % is not
+        // reached; ring-to-ring noise of the column tops is ~0.2 spacing, ~10 % of this rise.
         const BernoulliCheck law = bernoulliCheck(sim, 0.025);
         WARN("Bernoulli along the surface (" << c.solver << ", chi0 " << c.susceptibility << "): centre rise "
              << law.rise << " Pa, worst deviation " << law.worst << " Pa; on the axis mu0 F = " << law.pressure
              << " Pa, mu0 Mn^2/2 = " << law.traction << " Pa; RMS speed " << 1e3 * rms << " mm/s");
         REQUIRE(law.traction > 0.2 * law.pressure);   // the traction term matters here
-        REQUIRE(law.worst < 0.3 * law.rise);
+        REQUIRE(law.worst < 0.25 * law.rise);
     }
 }
