@@ -536,36 +536,10 @@ TEST_CASE("a pool over a magnet held still comes to rest in ferrohydrostatic bal
     };
     const Case c = GENERATE(Case{"dfsph", "external", 1.5}, Case{"wcsph", "external", 1.5}, Case{"dfsph", "auto", 0.5},
                             Case{"dfsph", "auto", 1.5}, Case{"wcsph", "auto", 1.5});
-    const std::string text = R"(
-[fluid]
-rest_density = 1200.0
-viscosity = 5e-6
-surface_tension = 0.025
-[[fluid.block]]
-shape = "cylinder"
-center = [0.0, 0.0, 0.0]
-radius = 0.025
-height = 0.01
-count = 2560
-[container]
-type = "dish"
-center = [0.0, 0.0, 0.0]
-radius = 0.025
-height = 0.02
-[sim]
-solver = ")" + c.solver + R"("
-[[magnets]]
-kind = "dipole"
-position = [0.0, 0.0, -0.02]
-direction = [0.0, 0.0, 1.0]
-moment = 3.0
-softening = 0.002
-[magnetization]
-susceptibility = )" + std::to_string(c.susceptibility) + R"(
-saturation = 35000
-solver = ")" + c.magnetization + R"("
-)";
-    FluidSimulation sim(parseSimScene(SceneDocument::parse(text, "rest_dipole.toml")));
+    // examples/ferrohydrostatic_pool.toml: 2,560 particles, a 3 A m^2 dipole 2 cm under the floor.
+    FluidSimulation sim(loadExample("ferrohydrostatic_pool.toml",
+                                    {"sim.solver=\"" + c.solver + "\"", "magnetization.solver=\"" + c.magnetization + "\"",
+                                     "magnetization.susceptibility=" + std::to_string(c.susceptibility)}));
     REQUIRE(sim.magnetics() != nullptr);
     double rms = 0;
     for (int frame = 1; frame <= 8; ++frame) {   // 4 frames a second, as ferro-sim would step them
