@@ -248,6 +248,16 @@ void FluidSimulation::applyImplicitViscosity(double dt) {
     stats_.viscosityResidual = result.relativeResidual;
 }
 
+void FluidSimulation::stopMotionIntoMagnetBodies(double dt) {
+    if (scene_.magnets.empty()) return;
+    const std::vector<MagnetObstacle> bodies =
+        magnetObstacles(scene_.magnets, time_ + dt, dt, 0.5 * spacing_, magnetSpeed_);
+    if (bodies.empty()) return;
+    forEachParticle(x_.size(), [&](size_t i) {
+        for (const MagnetObstacle& body : bodies) stopMotionInto(body, x_[i], v_[i], dt);
+    });
+}
+
 void FluidSimulation::setUpSurfaceTension() {
     // Surface tension (Akinci 2013): the coefficient gamma [m/s^2] of its cohesion and
     // curvature terms scales as sigma / (rho0 s^2). Akinci's model has no physical

@@ -159,6 +159,11 @@ public:
     /// stats; does nothing when viscosity is explicit (the force sweep has added it).
     /// Solvers call it after adding the non-pressure accelerations.
     void applyImplicitViscosity(double dt);
+    /// Removes the velocity into a magnet's body of each particle that this step's move
+    /// would take into it (MagnetObstacles.hpp), so that the pressure solve after it
+    /// predicts the positions the body constraint will allow. Solvers call it after the
+    /// non-pressure accelerations (and implicit viscosity), before the pressure solve.
+    void stopMotionIntoMagnetBodies(double dt);
     /// The viscous operator of the current state (for the implicit solve and for tests).
     ViscosityOperatorInput viscosityOperator() const;
 
