@@ -189,7 +189,9 @@ private:
     /// The colour gradient the magnetic surface force needs (when it does), then the
     /// magnetic update of the step.
     void updateMagnetics(bool forceSolve);
-    double chooseTimeStep(double dtLimit, double speed) const;
+    /// The step: the smallest of the solver's, the force, capillary and viscous limits and
+    /// sim.max_dt (`stable`, when given), then shortened to land on dtLimit.
+    double chooseTimeStep(double dtLimit, double speed, double* stable = nullptr) const;
     double maxSpeed(size_t* which = nullptr) const;
     /// The speed bound's parts that do not change during the run (gravity over the
     /// container's height, initial speeds, the magnets' motion, capillary speed).
@@ -217,7 +219,7 @@ private:
     SanityLimits limits_;
     SpeedBound speedBound_;
     double maxSpeedRatio_ = 0;
-    size_t stuckSteps_ = 0;     // steps in a row with dt near sim.min_dt
+    StallGuard stall_{0};       // steps in a row with dt near sim.min_dt
     double magnetSpeed_ = 0;    // the magnets' fastest motion between keys [m/s] (their bodies push at most this fast)
 
     // Fluid particles, sorted by (cell, id).
