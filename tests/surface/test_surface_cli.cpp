@@ -252,3 +252,27 @@ TEST_CASE("ferro-surface refuses a grid larger than the machine's memory up fron
     CHECK(err.find("this machine has available") != std::string::npos);
     CHECK_FALSE(fs::exists(s / "m.ply"));
 }
+
+TEST_CASE("ferro-surface never writes onto its particle input: single file, range, other spellings (issue 15)", "[surface][cli]") {
+    // `ferro-surface 'x/particles_{:04}.ply' --frames 0:1 --out 'x/particles_{:04}.ply'` used
+    // to replace the simulation's frames with meshes. Refused up front (exit 2, one line),
+    // the particle files byte for byte as they were.
+    Scratch s;
+    writeBall(s / "r_0000.ply", 0, 4 * kSpacing);
+    writeBall(s / "r_0001.ply", 1, 4 * kSpacing);
+    const std::string before0 = test::slurp(s / "r_0000.ply"), before1 = test::slurp(s / "r_0001.ply");
+    const std::string dir = s.dir.string();
+    for (const std::string& args :
+         {"'" + (s / "r_0000.ply") + "' --out '" + (s / "r_0000.ply") + "'",
+          "'" + (s / "r_0000.ply") + "' --out '" + dir + "/./r_0000.ply'",
+          "'" + (s / "r_{:04}.ply") + "' --frames 0:1 --out '" + (s / "r_{:04}.ply") + "'",
+          "'" + (s / "r_{:04}.ply") + "' --frames 0:1 --out '" + dir + "/./r_%04d.ply'"}) {
+        std::string err;
+        INFO(args);
+        CHECK(run(args, s, &err) == 2);
+        CHECK(std::count(err.begin(), err.end(), '\n') == 1);
+        CHECK(err.find("refusing to overwrite it") != std::string::npos);
+    }
+    CHECK(test::slurp(s / "r_0000.ply") == before0);
+    CHECK(test::slurp(s / "r_0001.ply") == before1);
+}
