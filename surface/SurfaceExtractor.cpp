@@ -4,6 +4,7 @@
 #include "surface/DensityKernels.hpp"
 
 #include "sim/core/AtomicFile.hpp"
+#include "sim/core/MachineMemory.hpp"
 
 #include <openvdb/openvdb.h>
 #include <openvdb/tools/FastSweeping.h>
@@ -323,6 +324,35 @@ double rasterizedVolume(const std::vector<DensityKernel>& kernels, double voxelS
     return sum * voxelSize * voxelSize * voxelSize;
 }
 
+GridEstimate estimateGrid(const std::vector<Vec3>& positions, const SurfaceParams& params, double spacing,
+                          double voxelSize) {
+    GridEstimate g;
+    g.cell = 2 * std::max(params.kernelRadius, 1.0) * spacing;
+    if (positions.empty() || !(g.cell > 0) || !(voxelSize > 0)) return g;
+    // Cell keys, sorted and counted: O(n log n), a few MB, no grid. Coordinates beyond
+    // 2^20 cells from the origin wrap (the key has 21 bits per axis): such a cloud is
+    // refused by the rasterizer's index check anyway, and wrapping only undercounts.
+    std::vector<uint64_t> keys(positions.size());
+    const double inv = 1.0 / g.cell;
+    tbb::parallel_for(tbb::blocked_range<size_t>(0, positions.size(), 1 << 14), [&](const tbb::blocked_range<size_t>& r) {
+        for (size_t i = r.begin(); i != r.end(); ++i) {
+            uint64_t key = 0;
+            for (int a = 0; a < 3; ++a) {
+                const double c = std::floor(double(positions[i][a]) * inv);
+                const int64_t k = std::isfinite(c) ? int64_t(std::clamp(c, -1e15, 1e15)) : 0;
+                key = (key << 21) | (uint64_t(k) & ((uint64_t(1) << 21) - 1));
+            }
+            keys[i] = key;
+        }
+    });
+    tbb::parallel_sort(keys.begin(), keys.end());
+    g.cells = size_t(std::unique(keys.begin(), keys.end()) - keys.begin());
+    const double perCell = std::pow(g.cell / voxelSize, 3);
+    g.voxels = double(g.cells) * perCell;
+    g.bytes = g.voxels * GridEstimate::kBytesPerVoxel;
+    return g;
+}
+
 TriangleMesh extractSurface(const std::vector<Vec3>& positions, const SurfaceParams& params, double spacing,
                             const std::string& vdbPath, SurfaceStats* stats) {
     initOpenVdb();
@@ -345,11 +375,28 @@ TriangleMesh extractSurface(const std::vector<Vec3>& positions, const SurfacePar
           << " m (1/" << kMinVoxelsPerSpacing << " to " << kMaxSpacingsPerVoxel << " spacings; default half a spacing)";
         throw SurfaceError(o.str());
     }
+    // Before anything is allocated: a fine voxel over many particles asks for more memory
+    // than the machine has (std::bad_alloc or the OOM killer after minutes otherwise).
+    GridEstimate grid;
+    if (!positions.empty()) {
+        grid = estimateGrid(positions, params, spacing, voxel);
+        const double available = availableMemoryBytes();
+        if (available > 0 && grid.bytes > available) {
+            std::ostringstream o;
+            o.precision(3);
+            o << "voxel size " << voxel << " m (--voxel-size or surface.voxel_size; the spacing is " << spacing
+              << " m): the grid needs about " << formatBytes(grid.bytes) << " (" << grid.voxels << " voxels around "
+              << positions.size() << " particles), more than the " << formatBytes(available)
+              << " this machine has available";
+            throw SurfaceError(o.str());
+        }
+    }
     SurfaceStats local;
     SurfaceStats& st = stats ? *stats : local;
     st = SurfaceStats{};
     st.spacing = spacing;
     st.voxelSize = voxel;
+    st.estimatedVoxels = grid.voxels;
 
     TriangleMesh mesh;
     if (!positions.empty()) {

@@ -38,6 +38,7 @@ public:
         // Implicit viscosity (when chosen) is a non-pressure force too: solved here, before
         // the density solve, as in SPlisHSPlasH's DFSPH.
         sim_.applyImplicitViscosity(dt);
+        sim_.stopMotionIntoMagnetBodies(dt);
         solveDensity(dt);
     }
 

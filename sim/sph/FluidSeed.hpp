@@ -23,8 +23,6 @@ struct RunSize {
     std::string key;   ///< the scene key that sets the size ("fluid.spacing" or a block's count)
 };
 RunSize estimateRunSize(const SimScene& scene);
-/// MemAvailable of /proc/meminfo (or sysconf's available pages) [bytes]; 0 if unknown.
-double availableMemoryBytes();
 /// Throws SceneError naming the key when the estimate exceeds the available memory.
 void checkRunSize(const SimScene& scene);
 

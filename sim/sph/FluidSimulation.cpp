@@ -248,6 +248,16 @@ void FluidSimulation::applyImplicitViscosity(double dt) {
     stats_.viscosityResidual = result.relativeResidual;
 }
 
+void FluidSimulation::stopMotionIntoMagnetBodies(double dt) {
+    if (scene_.magnets.empty()) return;
+    const std::vector<MagnetObstacle> bodies =
+        magnetObstacles(scene_.magnets, time_ + dt, dt, 0.5 * spacing_, magnetSpeed_);
+    if (bodies.empty()) return;
+    forEachParticle(x_.size(), [&](size_t i) {
+        for (const MagnetObstacle& body : bodies) stopMotionInto(body, x_[i], v_[i], dt);
+    });
+}
+
 void FluidSimulation::setUpSurfaceTension() {
     // Surface tension (Akinci 2013): the coefficient gamma [m/s^2] of its cohesion and
     // curvature terms scales as sigma / (rho0 s^2). Akinci's model has no physical
@@ -464,7 +474,7 @@ double FluidSimulation::maxSpeed(size_t* which) const {
     return std::sqrt(double(vmax));
 }
 
-double FluidSimulation::chooseTimeStep(double dtLimit, double speed) const {
+double FluidSimulation::chooseTimeStep(double dtLimit, double speed, double* stable) const {
     // Force criterion (Monaghan 1992): dt <= 0.25 sqrt(h / |a|). Gravity alone never binds
     // at SPH spacings; a strong Kelvin force near a magnet pole does. Both are known at the
     // step's start, so the step stays a pure function of the state (exact resume).
@@ -482,6 +492,7 @@ double FluidSimulation::chooseTimeStep(double dtLimit, double speed) const {
             << " s (max speed " << speed << " m/s): the simulation is unstable";
         throw SimulationError(msg.str());
     }
+    if (stable) *stable = dt;
     // Land exactly on the limit (a frame time) without leaving a sliver of a step.
     if (dt >= dtLimit) return dtLimit;
     if (2 * dt > dtLimit) return 0.5 * dtLimit;
@@ -765,7 +776,7 @@ double FluidSimulation::step(double dtLimit) {
         // start (so a resumed run continues exactly) and whenever it has gone stale.
         updateMagnetics(frameStart_);
         frameStart_ = false;
-        if (magnetics_->unconvergedInRow() >= SanityLimits::kMaxUnconvergedSolves) {
+        if (StallGuard::solverStalled(magnetics_->unconvergedInRow())) {
             std::ostringstream msg;
             msg.precision(3);
             msg << "the magnetization solve ended at its iteration cap (magnetization.max_iterations = "
@@ -778,22 +789,21 @@ double FluidSimulation::step(double dtLimit) {
     size_t fastest = 0;
     const double speed = maxSpeed(&fastest);
     checkSpeed(speed, fastest);
-    const double dt = chooseTimeStep(dtLimit, speed);
+    double stableDt = 0;
+    const double dt = chooseTimeStep(dtLimit, speed, &stableDt);
     // A step near sim.min_dt that lasts: the run would crawl for hours before (if ever)
-    // failing. Shortened last steps of a frame (dt == dtLimit) do not count.
-    if (dt < SanityLimits::kNearMinDt * scene_.solver.minDt && dt < dtLimit) {
-        if (++stuckSteps_ >= SanityLimits::kMaxStuckSteps) {
-            std::ostringstream msg;
-            msg.precision(3);
-            msg << "time step stayed below " << SanityLimits::kNearMinDt << " x sim.min_dt = "
-                << SanityLimits::kNearMinDt * scene_.solver.minDt << " s for " << stuckSteps_
-                << " steps in a row at t = " << time_ << " s (dt " << dt << " s, max speed " << speed
-                << " m/s, max magnetic acceleration " << (magnetics_ ? magnetics_->maxAcceleration() : 0.0)
-                << " m/s^2): the simulation cannot make progress";
-            throw SimulationError(msg.str());
-        }
-    } else {
-        stuckSteps_ = 0;
+    // failing. The stable step counts, not the one shortened to land on a frame's end
+    // (that one used to reset the count, so a stuck run whose frames took fewer than
+    // kMaxStuckSteps steps each never stopped).
+    if (stall_.recordStep(stableDt)) {
+        std::ostringstream msg;
+        msg.precision(3);
+        msg << "time step stayed below " << SanityLimits::kNearMinDt << " x sim.min_dt = "
+            << SanityLimits::kNearMinDt * scene_.solver.minDt << " s for " << stall_.stuckSteps()
+            << " steps in a row at t = " << time_ << " s (dt " << stableDt << " s, max speed " << speed
+            << " m/s, max magnetic acceleration " << (magnetics_ ? magnetics_->maxAcceleration() : 0.0)
+            << " m/s^2): the simulation cannot make progress";
+        throw SimulationError(msg.str());
     }
     solver_->advanceVelocities(dt);
     integratePositions(dt);
@@ -824,6 +834,7 @@ void FluidSimulation::advanceTo(double tEnd) {
 void FluidSimulation::setUpSanityGuard() {
     // The parts of the speed bound (SanityGuard.hpp) fixed for the whole run.
     limits_.speedOverride = scene_.solver.maxSpeed;
+    stall_ = StallGuard(scene_.solver.minDt);
     speedBound_.override = scene_.solver.maxSpeed;
     const Vec3d g = scene_.solver.gravity;
     const double gNorm = g.norm();

@@ -159,6 +159,11 @@ public:
     /// stats; does nothing when viscosity is explicit (the force sweep has added it).
     /// Solvers call it after adding the non-pressure accelerations.
     void applyImplicitViscosity(double dt);
+    /// Removes the velocity into a magnet's body of each particle that this step's move
+    /// would take into it (MagnetObstacles.hpp), so that the pressure solve after it
+    /// predicts the positions the body constraint will allow. Solvers call it after the
+    /// non-pressure accelerations (and implicit viscosity), before the pressure solve.
+    void stopMotionIntoMagnetBodies(double dt);
     /// The viscous operator of the current state (for the implicit solve and for tests).
     ViscosityOperatorInput viscosityOperator() const;
 
@@ -184,7 +189,9 @@ private:
     /// The colour gradient the magnetic surface force needs (when it does), then the
     /// magnetic update of the step.
     void updateMagnetics(bool forceSolve);
-    double chooseTimeStep(double dtLimit, double speed) const;
+    /// The step: the smallest of the solver's, the force, capillary and viscous limits and
+    /// sim.max_dt (`stable`, when given), then shortened to land on dtLimit.
+    double chooseTimeStep(double dtLimit, double speed, double* stable = nullptr) const;
     double maxSpeed(size_t* which = nullptr) const;
     /// The speed bound's parts that do not change during the run (gravity over the
     /// container's height, initial speeds, the magnets' motion, capillary speed).
@@ -212,7 +219,7 @@ private:
     SanityLimits limits_;
     SpeedBound speedBound_;
     double maxSpeedRatio_ = 0;
-    size_t stuckSteps_ = 0;     // steps in a row with dt near sim.min_dt
+    StallGuard stall_{0};       // steps in a row with dt near sim.min_dt
     double magnetSpeed_ = 0;    // the magnets' fastest motion between keys [m/s] (their bodies push at most this fast)
 
     // Fluid particles, sorted by (cell, id).

@@ -97,4 +97,21 @@ bool keepOutside(const MagnetObstacle& body, Vec3& x, Vec3& v) {
     return true;
 }
 
+bool stopMotionInto(const MagnetObstacle& body, const Vec3& x, Vec3& v, double dt) {
+    const Vec3 next = x + Real(dt) * v;
+    const Vec3 lo = x.cwiseMin(next), hi = x.cwiseMax(next);
+    if ((hi.array() < body.lo.array()).any() || (lo.array() > body.hi.array()).any()) return false;
+    const Vec3d pn = next.cast<double>();
+    if ((pn - closestCore(body, pn)).norm() >= body.radius) return false;
+    const Vec3d p = x.cast<double>();
+    const Vec3d r = p - closestCore(body, p);
+    const double dist = r.norm();
+    const Vec3d n = dist > 0 ? Vec3d(r / dist) : body.axis;
+    const Vec3d vd = v.cast<double>();
+    const double into = (vd - body.velocity).dot(n);
+    if (!(into < 0)) return false;
+    v = (vd - into * n).cast<Real>();
+    return true;
+}
+
 } // namespace ferro

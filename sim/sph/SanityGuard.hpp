@@ -17,6 +17,8 @@
 // - the time step stays near sim.min_dt for many steps in a row (the run would crawl for
 //   hours before failing);
 // - the magnetization solve hits its iteration cap without converging many times in a row.
+// The last two count steps and solves in a row (StallGuard below), so they are tested as a
+// unit with a made-up step history as well as through scenes.
 #include "sim/core/Types.hpp"
 
 #include <cstddef>
@@ -69,6 +71,31 @@ struct SpeedBound {
     double value() const;
     /// The same without the safety factor [m/s] (what the scene's energy could give).
     double energySpeed() const;
+};
+
+/// The guard's counters of a run that crawls or whose field is wrong on every step.
+class StallGuard {
+public:
+    explicit StallGuard(double minDt) : minDt_(minDt) {}
+    /// One step's stable time step [s]: what the scene allowed, before the step was
+    /// shortened to land on a frame's end (a frame's short last step neither counts nor
+    /// resets the count). Returns true when the run must stop: kMaxStuckSteps steps in a
+    /// row below kNearMinDt * min_dt.
+    bool recordStep(double stableDt) {
+        stuck_ = stableDt < SanityLimits::kNearMinDt * minDt_ ? stuck_ + 1 : 0;
+        return stuck_ >= SanityLimits::kMaxStuckSteps;
+    }
+    /// Steps in a row so far near min_dt.
+    size_t stuckSteps() const { return stuck_; }
+    /// True when the magnetization solves in a row that ended at their iteration cap
+    /// unconverged are too many: the run must stop.
+    static bool solverStalled(size_t unconvergedInRow) {
+        return unconvergedInRow >= SanityLimits::kMaxUnconvergedSolves;
+    }
+
+private:
+    double minDt_;
+    size_t stuck_ = 0;
 };
 
 } // namespace ferro

@@ -51,6 +51,7 @@ public:
         forEachParticle(n, [&](size_t i) { v[i] += Real(dt) * a[i]; });
         // Implicit viscosity (when chosen) on the velocities after all other forces.
         sim_.applyImplicitViscosity(dt);
+        sim_.stopMotionIntoMagnetBodies(dt);
         StepStats& stats = sim_.solverStats();
         stats.pressureIterations = 0;
         stats.divergenceIterations = 0;

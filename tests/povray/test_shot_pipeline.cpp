@@ -258,3 +258,47 @@ TEST_CASE("shot.sh --preset passes the documented settings to the stages; an unk
     REQUIRE(run("make -C '" + out.string() + "' --no-print-directory shot/shot.pov").code == 0);
     CHECK(slurp(out / "shot" / "render.ini").find("\nWidth=100\n") != std::string::npos);
 }
+
+TEST_CASE("every stage walks the one exit-code table: missing input 4, bad input 2, run failed 3 (issue 15)", "[pov][pipeline]")
+{
+    // sim/core/ExitCodes.hpp: 0 done, 2 bad input, 3 the run failed, 4 an input missing.
+    // Each stage's own tests check its messages; this walks the codes across all four.
+    const std::string bin = pipelineBin();
+    REQUIRE(fs::exists(bin + "ferro-spikes"));
+    const fs::path dir = freshDir("exit_codes");
+    spit(dir / "tiny.toml", kTinyScene);
+    spit(dir / "garbage.ply", "not a ply file\n");
+    const std::string scene = " --scene '" + (dir / "tiny.toml").string() + "'";
+    const std::string missing = "'" + (dir / "missing.ply").string() + "'";
+    const std::string garbage = "'" + (dir / "garbage.ply").string() + "'";
+    const std::string out = " --out '" + (dir / "out").string() + "'";
+    struct Case {
+        std::string what, cmd;
+        int code;
+    };
+    const std::vector<Case> cases = {
+        {"ferro-sim, missing scene", bin + "ferro-sim '" + (dir / "missing.toml").string() + "'" + out, 4},
+        {"ferro-sim, bad key", bin + "ferro-sim '" + (dir / "tiny.toml").string() + "'" + out + " --set fluid.colour=3", 2},
+        {"ferro-sim, unknown option", bin + "ferro-sim '" + (dir / "tiny.toml").string() + "'" + out + " --no-such-flag", 2},
+        {"ferro-sim, run failed (sanity guard)",
+         bin + "ferro-sim '" + (dir / "tiny.toml").string() + "' --out '" + (dir / "sim").string() + "' --set sim.max_speed=1e-6", 3},
+        {"ferro-surface, missing particles", bin + "ferro-surface " + missing + out + ".ply", 4},
+        {"ferro-surface, garbage particles", bin + "ferro-surface " + garbage + out + ".ply", 2},
+        {"ferro-surface, unknown option", bin + "ferro-surface " + garbage + out + ".ply --no-such-flag", 2},
+        {"ferro-spikes, missing surface", bin + "ferro-spikes " + missing + scene + out + ".ply", 4},
+        {"ferro-spikes, garbage surface", bin + "ferro-spikes " + garbage + scene + out + ".ply", 2},
+        {"ferro-spikes, unknown option", bin + "ferro-spikes " + garbage + scene + out + ".ply --no-such-flag", 2},
+        {"ferro-pov, missing mesh", bin + "ferro-pov " + missing + scene + out, 4},
+        {"ferro-pov, garbage mesh", bin + "ferro-pov " + garbage + scene + out, 2},
+        {"ferro-pov, unknown option", bin + "ferro-pov " + garbage + scene + out + " --no-such-flag", 2},
+    };
+    for (const Case& c : cases) {
+        const Result r = run(c.cmd);
+        INFO(c.what << ": " << r.output);
+        CHECK(r.code == c.code);
+        CHECK(std::count(r.output.begin(), r.output.end(), '\n') >= 1);
+        CHECK(r.output.find(": error: ") != std::string::npos);
+    }
+    // The run that failed kept its frame 0.
+    CHECK(fs::exists(dir / "sim" / "particles_0000.ply"));
+}

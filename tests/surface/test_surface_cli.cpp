@@ -230,3 +230,49 @@ TEST_CASE("ferro-surface: empty and one-particle files give an empty or tiny mes
     CHECK_FALSE(one.empty());
     CHECK(enclosedVolume(one) > 0);
 }
+
+TEST_CASE("ferro-surface refuses a grid larger than the machine's memory up front, naming --voxel-size (issue 15)", "[surface][cli]") {
+    // 200,000 particles 10 spacings apart (a spray), a voxel of 1/50 spacing (the finest
+    // accepted): each particle's kernel box (3 spacings across) alone is 150^3 voxels,
+    // 6.75e11 in all, 13.5 TB at GridEstimate's 20 bytes per voxel. Refused before the kernels are built: one line naming the option and the sizes,
+    // exit 2, no mesh. (Without the check this allocated until the OOM killer came.)
+    Scratch s;
+    ParticleTable t;
+    t.names = {"x", "y", "z"};
+    t.comments = {{"frame", "0"}, {"spacing", "0.001"}};
+    for (int i = 0; i < 200000; ++i)
+        t.values.insert(t.values.end(), {0.01f * float(i % 100), 0.01f * float((i / 100) % 100), 0.01f * float(i / 10000)});
+    writeParticleFile(s / "spray.ply", t);
+    std::string err;
+    CHECK(run("'" + (s / "spray.ply") + "' --voxel-size 2e-5 --out '" + (s / "m.ply") + "'", s, &err) == 2);
+    CAPTURE(err);
+    CHECK(std::count(err.begin(), err.end(), '\n') == 1);
+    CHECK(err.find("--voxel-size") != std::string::npos);
+    CHECK(err.find("the grid needs about 13.5 TB (6.75e+11 voxels around 200000 particles)") != std::string::npos);
+    CHECK(err.find("this machine has available") != std::string::npos);
+    CHECK_FALSE(fs::exists(s / "m.ply"));
+}
+
+TEST_CASE("ferro-surface never writes onto its particle input: single file, range, other spellings (issue 15)", "[surface][cli]") {
+    // `ferro-surface 'x/particles_{:04}.ply' --frames 0:1 --out 'x/particles_{:04}.ply'` used
+    // to replace the simulation's frames with meshes. Refused up front (exit 2, one line),
+    // the particle files byte for byte as they were.
+    Scratch s;
+    writeBall(s / "r_0000.ply", 0, 4 * kSpacing);
+    writeBall(s / "r_0001.ply", 1, 4 * kSpacing);
+    const std::string before0 = test::slurp(s / "r_0000.ply"), before1 = test::slurp(s / "r_0001.ply");
+    const std::string dir = s.dir.string();
+    for (const std::string& args :
+         {"'" + (s / "r_0000.ply") + "' --out '" + (s / "r_0000.ply") + "'",
+          "'" + (s / "r_0000.ply") + "' --out '" + dir + "/./r_0000.ply'",
+          "'" + (s / "r_{:04}.ply") + "' --frames 0:1 --out '" + (s / "r_{:04}.ply") + "'",
+          "'" + (s / "r_{:04}.ply") + "' --frames 0:1 --out '" + dir + "/./r_%04d.ply'"}) {
+        std::string err;
+        INFO(args);
+        CHECK(run(args, s, &err) == 2);
+        CHECK(std::count(err.begin(), err.end(), '\n') == 1);
+        CHECK(err.find("refusing to overwrite it") != std::string::npos);
+    }
+    CHECK(test::slurp(s / "r_0000.ply") == before0);
+    CHECK(test::slurp(s / "r_0001.ply") == before1);
+}

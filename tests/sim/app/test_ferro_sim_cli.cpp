@@ -183,6 +183,90 @@ TEST_CASE("a blow-up stops with a clear message and keeps the frames written", "
     fs::remove_all(dir);
 }
 
+namespace {
+
+/// A 2 cm dish of 500 particles, a 1 A m^2 dipole 1 cm under its floor: the scene of the
+/// sanity guard's tests below (each sets what trips the guard).
+const std::string kGuardDish = R"([shot]
+fps = 1000
+duration = 0.05
+[fluid]
+rest_density = 1200.0
+[[fluid.block]]
+shape = "cylinder"
+radius = 0.01
+height = 0.004
+count = 500
+[container]
+type = "dish"
+radius = 0.01
+height = 0.01
+[magnetization]
+susceptibility = 1.5
+saturation = 35000.0
+[[magnets]]
+kind = "dipole"
+position = [0, 0, -0.01]
+moment = 1.0
+)";
+
+/// Runs the guard dish with `overrides`; requires exit 3 with one line holding `cause`
+/// after the progress lines, and every frame written before it intact: readable, 500
+/// finite rows, its header's frame number its name's. Returns the frames written.
+int requireGuardStop(const std::string& overrides, const std::string& cause) {
+    const TempDir tmp("guard");
+    const std::string scene = tmp.write("s.toml", kGuardDish);
+    const std::string out = tmp.file("out");
+    const CommandResult r = run(kSim + " " + scene + " --out " + out + " --threads 2 " + overrides);
+    CAPTURE(overrides, r.output);
+    REQUIRE(r.code == 3);
+    const size_t at = r.output.find("ferro-sim: error: ");
+    REQUIRE(at != std::string::npos);
+    const std::string last = r.output.substr(at);
+    REQUIRE(lines(last) == 1);
+    REQUIRE(last.find(cause) != std::string::npos);
+    int written = 0;
+    while (fs::exists(frame(out, written))) {
+        const ParticleTable t = readParticleFile(frame(out, written));
+        REQUIRE(t.rows() == 500);
+        REQUIRE(int(t.commentNumber("frame", -1)) == written);
+        for (float v : t.values) REQUIRE(std::isfinite(v));
+        ++written;
+    }
+    // The progress lines name every frame written after frame 0, so each was complete.
+    REQUIRE(lines(r.output.substr(0, at)) >= written);
+    std::printf("guard stop after %d frames: %s", written - 1, last.c_str());
+    return written;
+}
+
+} // namespace
+
+TEST_CASE("the sanity guard stops a run whose time step stays near sim.min_dt (exit 3, frames kept)", "[cli][guard]") {
+    // sim.max_dt 1e-5 s with min_dt 5e-6 s: every step is below 4 x min_dt, 100 steps per
+    // 1 ms frame (101 when rounding splits a frame's last step in two); the 1000th in a row
+    // stops the run in frame 9 or 10. Frames end on a step shortened to the frame's end; it
+    // must not restart the count (it did: this scene ran all 50 frames).
+    const int written = requireGuardStop("--set sim.max_dt=1e-5 --set sim.min_dt=5e-6",
+                                         "time step stayed below 4 x sim.min_dt = 2e-05 s for 1000 steps in a row");
+    REQUIRE(written >= 9);
+    REQUIRE(written <= 10);
+}
+
+TEST_CASE("the sanity guard stops a run whose magnetization solve ends at its cap every step (exit 3, frames kept)", "[cli][guard]") {
+    // One field evaluation per solve cannot reach a tolerance of 1e-9; solved on every step,
+    // the 50th unconverged solve in a row (the first is frame 0's) stops the run.
+    const int written = requireGuardStop(
+        "--set magnetization.max_iterations=1 --set magnetization.tolerance=1e-9 --set magnetization.resolve_every=1",
+        "the magnetization solve ended at its iteration cap (magnetization.max_iterations = 1) without converging 50 times in a row");
+    REQUIRE(written >= 2);
+}
+
+TEST_CASE("the sanity guard stops a run faster than sim.max_speed (exit 3, frames kept)", "[cli][guard]") {
+    // The fluid heaps over the magnet at a few cm/s within the first frames.
+    const int written = requireGuardStop("--set sim.max_speed=0.01", "faster than this scene can make it: bound 0.01 m/s (sim.max_speed)");
+    REQUIRE(written >= 1);
+}
+
 TEST_CASE("resume trusts a frame only if its header agrees with its name and no earlier frame is missing (issue 15)", "[cli]") {
     // A stray particles_0099.ply whose header said frame 3 was resumed "after frame 99"
     // (frames 4.. never written); a missing middle frame was a silent gap.
