@@ -14,6 +14,8 @@
 # The scene is bench-sim's (tests/bench/bench_sim.cpp): a 32 x 32 x 40 block of water at
 # 2.5 mm spacing (particle radius 1.25 mm, kernel support 5 mm in both codes) in a
 # 0.32 x 0.08 x 0.2 m box, gravity -z, no surface tension, from t = 0 for PEER_SECONDS.
+# (SPlisHSPlasH 2.16.0 was measured; its scene format is the one since 2.16.0, with a block
+# per solver, e.g. "Standard viscosity" inside the material.)
 # Settings handed to SPlisHSPlasH from the `scene:` line bench-sim prints (so they cannot
 # drift from Ferro's): the same particle positions, viscosity (its "Standard" viscosity has
 # Ferro's form and coefficient: fluid plus artificial viscosity), walls of one layer of
@@ -40,8 +42,14 @@
 # pair is adjacent in time (Ferro, then SPlisHSPlasH, per solver) so both see similar load;
 # with PEER_REPEAT=N the pair runs N times and the fastest run of each is kept.
 #
+# Threads: bench-sim's TBB limit and OMP_NUM_THREADS for SPlisHSPlasH (OpenMP), with
+# OMP_WAIT_POLICY=passive: on this shared, oversubscribed machine OpenMP's default spinning
+# at barriers made SPlisHSPlasH's neighbour search 1.4x slower on 2 threads than on 1
+# (160 against 116 ms per search at a load of 9); passive waiting gave 135 ms.
+#
 # Environment: FERRO_BIN (default build/bin: bench-sim), PEER_SECONDS (simulated time,
-# default 0.2; BENCH_QUICK=1: 0.02), PEER_THREADS (default 2), PEER_REPEAT (default 1).
+# default 0.1: the dam's collapse; BENCH_QUICK=1: 0.02), PEER_THREADS (default 2),
+# PEER_REPEAT (default 1), PEER_BUILD_NOTE (a sentence on how PEER_SIM was built, for peer.md).
 # Exit codes: 2 bad arguments (or PEER_SIM is not SPlisHSPlasH's simulator), 4 missing
 # PEER_SIM or bench-sim, 3 a run failed.
 set -euo pipefail
@@ -58,12 +66,17 @@ peer_version="$("$peer_sim" --version 2>/dev/null | head -n 1)"
 root="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
 bin="${FERRO_BIN:-$root/build/bin}"
 [[ -x "$bin/bench-sim" ]] || die 4 "$bin/bench-sim: not built (cmake --build build --target bench-sim)"
-seconds="${PEER_SECONDS:-$([[ "${BENCH_QUICK:-0}" == 1 ]] && echo 0.02 || echo 0.2)}"
+seconds="${PEER_SECONDS:-$([[ "${BENCH_QUICK:-0}" == 1 ]] && echo 0.02 || echo 0.1)}"
+# DFSPH's pair runs shorter by default: SPlisHSPlasH's DFSPH steps are slow here (see above).
+dfsph_seconds="${PEER_DFSPH_SECONDS:-$([[ "${BENCH_QUICK:-0}" == 1 ]] && echo 0.005 || echo 0.02)}"
+seconds_for() { [[ "$1" == dfsph ]] && echo "$dfsph_seconds" || echo "$seconds"; }
 threads="${PEER_THREADS:-2}"
 repeat="${PEER_REPEAT:-1}"
 sample=0.005 # density sampling interval [s]; SPlisHSPlasH exports at 1 / sample frames per second
-[[ "$seconds" =~ ^[0-9]*\.?[0-9]+$ ]] && awk -v s="$seconds" 'BEGIN { exit !(s > 0) }' ||
-  die 2 "PEER_SECONDS=$seconds: not a positive number"
+for s in "$seconds" "$dfsph_seconds"; do
+  [[ "$s" =~ ^[0-9]*\.?[0-9]+$ ]] && awk -v s="$s" 'BEGIN { exit !(s > 0) }' ||
+    die 2 "PEER_SECONDS / PEER_DFSPH_SECONDS=$s: not a positive number"
+done
 [[ "$threads" =~ ^[1-9][0-9]*$ ]] || die 2 "PEER_THREADS=$threads: not a positive integer"
 [[ "$repeat" =~ ^[1-9][0-9]*$ ]] || die 2 "PEER_REPEAT=$repeat: not a positive integer"
 command -v python3 >/dev/null || die 4 "python3 is not installed (it reads SPlisHSPlasH's VTK files)"
@@ -71,7 +84,9 @@ command -v python3 >/dev/null || die 4 "python3 is not installed (it reads SPlis
 mkdir -p "$out" || die 2 "$out: cannot create the output directory"
 out="$(cd "$out" && pwd)"
 work="$out/cache/peer"
-rm -rf "$work"
+# PEER_REUSE=1 keeps the results of earlier runs in OUT_DIR/cache/peer and only rewrites the
+# CSV and Markdown from them (for changes to the report's form, not to the runs).
+[[ "${PEER_REUSE:-0}" == 1 ]] || rm -rf "$work"
 mkdir -p "$work"
 
 # The box as a closed triangle mesh at its real size (SPlisHSPlasH samples its surface).
@@ -107,7 +122,7 @@ cpu_seconds() { awk '{ s = $1 + $2 } END { printf "%.2f", s }' "$1"; }
 # and leaves the scene line in $work/scene.txt.
 ferro_run() {
   local log="$work/ferro_$1.log"
-  if ! { time OMP_NUM_THREADS="$threads" "$bin/bench-sim" --threads "$threads" --seconds "$seconds" --warmup 0 \
+  if ! { time OMP_NUM_THREADS="$threads" "$bin/bench-sim" --threads "$threads" --seconds "$(seconds_for "$1")" --warmup 0 \
       --solver "$1" --tension off --sample "$sample" > "$log" 2>&1; } 2> "$work/ferro_$1.cpu"; then
     cat "$log" >&2
     die 3 "bench-sim --solver $1 failed"
@@ -131,7 +146,7 @@ peer_scene() {
   tol="$(scene_value density_tol)" dtol="$(scene_value divergence_tol)" maxdt="$(scene_value max_dt)"
   maxit="$(scene_value max_iterations)" g="$(scene_value gravity)"
   python3 - "$work/peer_$solver.json" "$solver" "$dt" "$spacing" "$nu" "$c" "$rho0" "$tol" "$dtol" "$maxdt" \
-    "$maxit" "$g" "$seconds" "$sample" "$work/box.obj" <<'PY'
+    "$maxit" "$g" "$(seconds_for "$solver")" "$sample" "$work/box.obj" <<'PY'
 import json, sys
 (path, solver, dt, spacing, nu, c, rho0, tol, dtol, maxdt, maxit, g, seconds, sample, box) = sys.argv[1:]
 spacing, nu, c, rho0, g = float(spacing), float(nu), float(c), float(rho0), float(g)
@@ -148,7 +163,10 @@ config = {
     "timeStepSize": float(dt) if wcsph else float(maxdt),
     "cflMethod": 0 if wcsph else 1,
     "cflFactor": 1,                           # dt = 1 x 0.4 x diameter / max speed
-    "cflMinTimeStepSize": 1e-7,
+    # SPlisHSPlasH's default floor: its CFL step, which counts each particle's acceleration,
+    # fell towards it in the first DFSPH steps; with Ferro's floor (1e-7 s) its run had not
+    # reached t = 2.5 ms after 5 minutes.
+    "cflMinTimeStepSize": 1e-4,
     "cflMaxTimeStepSize": float(maxdt),
     "enableVTKExport": True,
     "dataExportFPS": 1.0 / float(sample),
@@ -179,12 +197,12 @@ peer_run() {
   local solver="$1" dir="$work/peer_$1"
   rm -rf "$dir"
   mkdir -p "$dir"
-  if ! { time OMP_NUM_THREADS="$threads" "$peer_sim" --no-gui --no-cache --output-dir "$dir" "$work/peer_$solver.json" \
+  if ! { time OMP_NUM_THREADS="$threads" OMP_WAIT_POLICY=passive "$peer_sim" --no-gui --no-cache --output-dir "$dir" "$work/peer_$solver.json" \
       > "$dir/stdout.log" 2>&1; } 2> "$dir/cpu.txt"; then
     tail -5 "$dir/stdout.log" >&2
     die 3 "SPlisHSPlasH ($solver) failed: $dir/stdout.log"
   fi
-  python3 - "$dir" "$solver" "$seconds" "$(scene_value rho0)" "$(cpu_seconds "$dir/cpu.txt")" <<'PY' || die 3 "could not read SPlisHSPlasH's $solver results in $dir"
+  python3 - "$dir" "$solver" "$(seconds_for "$solver")" "$(scene_value rho0)" "$(cpu_seconds "$dir/cpu.txt")" <<'PY' || die 3 "could not read SPlisHSPlasH's $solver results in $dir"
 import glob, os, re, sys
 from array import array
 d, solver, seconds, rho0, cpu = sys.argv[1], sys.argv[2], float(sys.argv[3]), float(sys.argv[4]), sys.argv[5]
@@ -226,12 +244,13 @@ declare -A best
 for ((r = 1; r <= repeat; ++r)); do
   for solver in wcsph dfsph; do
     echo "bench-peer.sh: run $r/$repeat, $solver: Ferro" >&2
-    ferro_run "$solver" > "$work/ferro_$solver.txt"
+    [[ "${PEER_REUSE:-0}" == 1 && -s "$work/ferro_$solver.txt" ]] || ferro_run "$solver" > "$work/ferro_$solver.txt"
+    grep '^scene:' "$work/ferro_$solver.log" > "$work/scene.txt" || die 3 "no scene line in $work/ferro_$solver.log"
     read -r f_steps f_ms f_wall f_iter f_err f_rho f_cpu < "$work/ferro_$solver.txt"
-    dt="$(awk -v s="$seconds" -v n="$f_steps" 'BEGIN { printf "%.9g", s / n }')"
+    dt="$(awk -v s="$(seconds_for "$solver")" -v n="$f_steps" 'BEGIN { printf "%.9g", s / n }')"
     peer_scene "$solver" "$dt"
     echo "bench-peer.sh: run $r/$repeat, $solver: SPlisHSPlasH" >&2
-    peer_run "$solver" > "$work/peer_$solver.txt"
+    [[ "${PEER_REUSE:-0}" == 1 && -s "$work/peer_$solver.txt" ]] || peer_run "$solver" > "$work/peer_$solver.txt"
     read -r p_steps p_ms p_wall p_iter p_particles p_rho p_cpu < "$work/peer_$solver.txt"
     [[ "$p_particles" == "$(scene_value particles)" ]] ||
       die 3 "SPlisHSPlasH made $p_particles particles, Ferro $(scene_value particles): the scenes differ"
@@ -249,21 +268,23 @@ particles="$(scene_value particles)"
 tol_percent="$(awk -v t="$(scene_value density_tol)" 'BEGIN { printf "%g", 100 * t }')"
 csv="$out/peer.csv"
 {
-  echo "setting,code,solver,particles,threads,simulated_s,steps,mean_dt_ms,ms_per_step,wall_s_per_sim_s,iterations_per_step,solver_density_error_percent,mean_density_error_percent,density_tolerance_percent,ms_ratio_to_ferro,ratio_to_ferro,cpu_s_per_sim_s,cpu_ratio_to_ferro,reference"
+  echo "setting,code,solver,particles,threads,simulated_s,steps,mean_dt_ms,ms_per_step,wall_s_per_sim_s,iterations_per_step,solver_density_error_percent,mean_density_error_percent,density_tolerance_percent,ms_ratio_to_ferro,ratio_to_ferro,cpu_s_per_sim_s,cpu_ratio_to_ferro,search_ms_per_step,reference"
   for solver in wcsph dfsph; do
     label="$(tr a-z A-Z <<< "$solver")"
     read -r f_ms f_steps f_wall f_iter f_err f_rho dt f_cpu <<< "${best[ferro_$solver]}"
     read -r p_ms p_steps p_wall p_iter p_rho p_cpu <<< "${best[peer_$solver]}"
     tol="$([[ $solver == dfsph ]] && echo "$tol_percent" || echo "")"
-    awk -v OFS=, -v s="$seconds" -v n="$particles" -v th="$threads" -v L="$label" -v tol="$tol" \
+    # SPlisHSPlasH's own timer of its neighbour search (CompactNSearch), part of ms_per_step.
+    p_search="$(awk '/Average time: neighborhood_search:/ { v = $4 } END { print v }' "$work/peer_$solver/stdout.log")"
+    awk -v OFS=, -v s="$(seconds_for "$solver")" -v n="$particles" -v th="$threads" -v L="$label" -v tol="$tol" \
       -v fms="$f_ms" -v fs="$f_steps" -v fw="$f_wall" -v fi="$f_iter" -v fe="$f_err" -v fr="$f_rho" \
-      -v pms="$p_ms" -v ps="$p_steps" -v pw="$p_wall" -v pi="$p_iter" -v pr="$p_rho" -v fc="$f_cpu" -v pc="$p_cpu" 'BEGIN {
+      -v pms="$p_ms" -v ps="$p_steps" -v pw="$p_wall" -v pi="$p_iter" -v pr="$p_rho" -v fc="$f_cpu" -v pc="$p_cpu" -v psearch="$p_search" 'BEGIN {
         fwall = fs * fms / 1e3 / s   # from the step times, as for SPlisHSPlasH
         print "Ferro " L, "Ferro", L, n, th, s, fs, sprintf("%.4f", 1e3 * s / fs), sprintf("%.2f", fms), sprintf("%.1f", fwall),
-              sprintf("%.1f", fi), sprintf("%.4f", fe), sprintf("%.4f", fr), tol, "1.00", "1.00", sprintf("%.1f", fc / s), "1.00", "itself"
+              sprintf("%.1f", fi), sprintf("%.4f", fe), sprintf("%.4f", fr), tol, "1.00", "1.00", sprintf("%.1f", fc / s), "1.00", "", "itself"
         print "SPlisHSPlasH " L, "SPlisHSPlasH", L, n, th, s, ps, sprintf("%.4f", 1e3 * s / ps), sprintf("%.2f", pms), sprintf("%.1f", pw),
               sprintf("%.1f", pi), "", sprintf("%.4f", pr), tol, sprintf("%.2f", pms / fms), sprintf("%.2f", pw / fwall),
-              sprintf("%.1f", pc / s), sprintf("%.2f", pc / fc),
+              sprintf("%.1f", pc / s), sprintf("%.2f", pc / fc), psearch == "" ? "" : sprintf("%.1f", psearch),
               "Ferro " L " in the same run"
       }'
   done
@@ -276,11 +297,12 @@ col() { awk -F, -v row="$1" -v name="$2" 'NR == 1 { for (i = 1; i <= NF; ++i) c[
   echo "## Peer comparison: SPlisHSPlasH and Ferro on the same dam break"
   echo
   echo "Both codes ran bench-sim's dam break ($particles particles, 2.5 mm spacing, 0.32 x 0.08 x 0.2 m"
-  echo "box, water, no surface tension) from t = 0 for $seconds simulated seconds on $threads threads, one"
+  echo "box, water, no surface tension) from t = 0 for $seconds simulated seconds (WCSPH) and $dfsph_seconds (DFSPH) on $threads threads, one"
   echo "after the other per solver; the fastest of $repeat run(s) each. Ratios are SPlisHSPlasH over"
   echo "Ferro (below 1: SPlisHSPlasH is faster); absolute times vary with the load of this shared"
   echo "machine. Made by \`scripts/bench-peer.sh\` (settings and what could not be matched: its header)"
   echo "on $(date -u +%F) at Ferro commit $(git -C "$root" rev-parse --short HEAD 2>/dev/null || echo unknown) with SPlisHSPlasH $peer_version."
+  [[ -z "${PEER_BUILD_NOTE:-}" ]] || echo "SPlisHSPlasH build: $PEER_BUILD_NOTE"
   echo
   echo "| code | solver | steps | ms/step | wall s per sim s | iterations/step | density error % (measured) | ratio ms/step | ratio wall s/sim s | ratio CPU s |"
   echo "|---|---|---:|---:|---:|---:|---:|---:|---:|---:|"
@@ -294,10 +316,15 @@ col() { awk -F, -v row="$1" -v name="$2" 'NR == 1 { for (i = 1; i <= NF; ++i) c[
   echo "  $(col "SPlisHSPlasH WCSPH" ratio_to_ferro)x Ferro's wall time per simulated second; mean compression"
   echo "  $(col "SPlisHSPlasH WCSPH" mean_density_error_percent) % against $(col "Ferro WCSPH" mean_density_error_percent) %. Ferro keeps a Verlet skin (a search every"
   echo "  few steps); SPlisHSPlasH searches every step."
+  echo "- SPlisHSPlasH's neighbour search (CompactNSearch, every step) takes $(col "SPlisHSPlasH WCSPH" search_ms_per_step) of its $(col "SPlisHSPlasH WCSPH" ms_per_step) ms"
+  echo "  per WCSPH step and $(col "SPlisHSPlasH DFSPH" search_ms_per_step) of $(col "SPlisHSPlasH DFSPH" ms_per_step) ms per DFSPH step."
+  echo "- Processor time of the whole processes (set-up and output included, less disturbed by other"
+  echo "  load): SPlisHSPlasH over Ferro $(col "SPlisHSPlasH WCSPH" cpu_ratio_to_ferro)x with WCSPH, $(col "SPlisHSPlasH DFSPH" cpu_ratio_to_ferro)x with DFSPH."
   echo "- Not matched: SPlisHSPlasH's particle volume is 0.8 d^3 (fixed in its fluid model), so its"
   echo "  block starts 20 % below rest density, falls together and flows with ~1.25x Ferro's neighbours"
   echo "  per particle; it is built with -march=native (AVX2 kernels), Ferro for generic x86-64 (SSE2);"
-  echo "  its wall particles lie on the box faces, Ferro's half a spacing outside."
+  echo "  its wall particles lie on the box faces, Ferro's half a spacing outside; threads are OpenMP"
+  echo "  (passive waiting) against Ferro's TBB, and OpenMP suffers more on this oversubscribed machine."
 } > "$out/peer.md"
 
 if [[ -x "$root/scripts/bench/plot.sh" ]]; then
