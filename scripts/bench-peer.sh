@@ -13,22 +13,24 @@
 #
 # The scene is bench-sim's (tests/bench/bench_sim.cpp): a 32 x 32 x 40 block of water at
 # 2.5 mm spacing (particle radius 1.25 mm, kernel support 5 mm in both codes) in a
-# 0.32 x 0.08 x 0.2 m box, gravity -z, no surface tension, from t = 0 for PEER_SECONDS.
+# 0.32 x 0.08 x 0.2 m box, gravity -z, no surface tension, from t = 0 for PEER_SECONDS
+# (WCSPH) and PEER_DFSPH_SECONDS (DFSPH).
 # (SPlisHSPlasH 2.16.0 was measured; its scene format is the one since 2.16.0, with a block
 # per solver, e.g. "Standard viscosity" inside the material.)
 # Settings handed to SPlisHSPlasH from the `scene:` line bench-sim prints (so they cannot
 # drift from Ferro's): the same particle positions, viscosity (its "Standard" viscosity has
 # Ferro's form and coefficient: fluid plus artificial viscosity), walls of one layer of
-# Akinci 2012 boundary particles (regular sampling) without wall viscosity, cubic spline
-# kernel, 2 threads; DFSPH: the same CFL rule (0.4 x spacing / max speed, cflFactor 1), the
-# same 1 ms step bound, density tolerance 0.02 % and divergence tolerance 0.1 %, 100
+# Akinci 2012 boundary particles (regular sampling) where Ferro's lie, half a spacing outside
+# the box faces, without wall viscosity, cubic spline kernel, 2 threads; DFSPH: the same CFL
+# rule (0.4 x spacing / max speed, cflFactor 1), the same 1 ms step bound (floor: its
+# default 0.1 ms), density tolerance 0.02 % and divergence tolerance 0.1 %, 100
 # iterations at most; WCSPH: Tait exponent 7 with Ferro's stiffness rho0 c^2 / 7 and
 # Ferro's mean time step of the same run as a fixed step (SPlisHSPlasH's CFL ignores the
 # speed of sound, so Ferro's sound-speed CFL cannot be given to it as a rule).
 # Not matched (stated in peer.md): SPlisHSPlasH's particle volume is 0.8 d^3 (a fixed
 # factor of its fluid model), so its block starts 20 % below rest density and settles
-# denser; its wall particles lie on the box faces, Ferro's half a spacing outside; it is
-# compiled with -march=native (AVX2), Ferro for generic x86-64; both in single precision.
+# denser; it is compiled with -march=native (AVX2), Ferro for generic x86-64; both in
+# single precision; OpenMP against TBB.
 #
 # The density error each code reaches is measured one way for both: the mean compression
 # max(0, rho / rho0 - 1) over the particles, from each code's own SPH densities after the
@@ -47,9 +49,12 @@
 # at barriers made SPlisHSPlasH's neighbour search 1.4x slower on 2 threads than on 1
 # (160 against 116 ms per search at a load of 9); passive waiting gave 135 ms.
 #
-# Environment: FERRO_BIN (default build/bin: bench-sim), PEER_SECONDS (simulated time,
-# default 0.1: the dam's collapse; BENCH_QUICK=1: 0.02), PEER_THREADS (default 2),
-# PEER_REPEAT (default 1), PEER_BUILD_NOTE (a sentence on how PEER_SIM was built, for peer.md).
+# Environment: FERRO_BIN (default build/bin: bench-sim), PEER_SECONDS (simulated time of the
+# WCSPH pair, default 0.05; BENCH_QUICK=1: 0.02), PEER_DFSPH_SECONDS (the DFSPH pair, default
+# 0.1; quick: 0.005), PEER_THREADS (default 2), PEER_REPEAT (default 1), PEER_REUSE=1 (only
+# rewrite CSV and Markdown from the runs kept in OUT_DIR/cache/peer), PEER_BUILD_NOTE (a
+# sentence on how PEER_SIM was built, for peer.md). SPlisHSPlasH's WCSPH pair takes ~6 min
+# of the ~8 here (2 shared cores).
 # Exit codes: 2 bad arguments (or PEER_SIM is not SPlisHSPlasH's simulator), 4 missing
 # PEER_SIM or bench-sim, 3 a run failed.
 set -euo pipefail
@@ -66,9 +71,11 @@ peer_version="$("$peer_sim" --version 2>/dev/null | head -n 1)"
 root="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
 bin="${FERRO_BIN:-$root/build/bin}"
 [[ -x "$bin/bench-sim" ]] || die 4 "$bin/bench-sim: not built (cmake --build build --target bench-sim)"
-seconds="${PEER_SECONDS:-$([[ "${BENCH_QUICK:-0}" == 1 ]] && echo 0.02 || echo 0.1)}"
-# DFSPH's pair runs shorter by default: SPlisHSPlasH's DFSPH steps are slow here (see above).
-dfsph_seconds="${PEER_DFSPH_SECONDS:-$([[ "${BENCH_QUICK:-0}" == 1 ]] && echo 0.005 || echo 0.02)}"
+seconds="${PEER_SECONDS:-$([[ "${BENCH_QUICK:-0}" == 1 ]] && echo 0.02 || echo 0.05)}"
+# The WCSPH pair is shorter: SPlisHSPlasH's WCSPH steps cost ~5x Ferro's here (its
+# neighbour search every step), and WCSPH takes ~15x as many steps as DFSPH. Over its first
+# ~20 ms SPlisHSPlasH's under-dense block needs no pressure, so DFSPH runs 0.1 s.
+dfsph_seconds="${PEER_DFSPH_SECONDS:-$([[ "${BENCH_QUICK:-0}" == 1 ]] && echo 0.005 || echo 0.1)}"
 seconds_for() { [[ "$1" == dfsph ]] && echo "$dfsph_seconds" || echo "$seconds"; }
 threads="${PEER_THREADS:-2}"
 repeat="${PEER_REPEAT:-1}"
@@ -89,29 +96,6 @@ work="$out/cache/peer"
 [[ "${PEER_REUSE:-0}" == 1 ]] || rm -rf "$work"
 mkdir -p "$work"
 
-# The box as a closed triangle mesh at its real size (SPlisHSPlasH samples its surface).
-cat > "$work/box.obj" <<'OBJ'
-v 0 0 0
-v 0.32 0 0
-v 0.32 0.08 0
-v 0 0.08 0
-v 0 0 0.2
-v 0.32 0 0.2
-v 0.32 0.08 0.2
-v 0 0.08 0.2
-f 1 3 2
-f 1 4 3
-f 5 6 7
-f 5 7 8
-f 1 2 6
-f 1 6 5
-f 2 3 7
-f 2 7 6
-f 3 4 8
-f 3 8 7
-f 4 1 5
-f 4 5 8
-OBJ
 
 # Processor time (user + system, all threads) of a whole process: a cross-check of the
 # step timers that other load on the machine disturbs less (it includes set-up and output).
@@ -189,6 +173,19 @@ scene = {
                      "end": [k * spacing + r for k in n], "translation": [0, 0, 0], "scale": [1, 1, 1]}],
 }
 json.dump(scene, open(path, "w"), indent=1)
+# The box as a closed triangle mesh (SPlisHSPlasH samples its surface), each face moved half
+# a spacing out: SPlisHSPlasH's wall particles then lie where Ferro's do (Ferro offsets its
+# wall layer half a spacing into the solid, the mirror image of the first fluid layer).
+# On the box faces themselves the first fluid layer sat half a spacing from the wall
+# particles and SPlisHSPlasH's first DFSPH step threw particles through the walls at 6 m/s.
+lo, hi = [-r] * 3, [0.32 + r, 0.08 + r, 0.2 + r]
+with open(box, "w") as f:
+    for k in range(8):
+        f.write("v %.9g %.9g %.9g\n" % tuple(hi[a] if k >> a & 1 else lo[a] for a in range(3)))
+    # vertex index = 1 + x + 2 y + 4 z
+    for tri in ((1, 4, 2), (1, 3, 4), (5, 6, 8), (5, 8, 7), (1, 2, 6), (1, 6, 5),
+                (2, 4, 8), (2, 8, 6), (4, 3, 7), (4, 7, 8), (3, 1, 5), (3, 5, 7)):
+        f.write("f %d %d %d\n" % tri)
 PY
 }
 
@@ -322,9 +319,10 @@ col() { awk -F, -v row="$1" -v name="$2" 'NR == 1 { for (i = 1; i <= NF; ++i) c[
   echo "  load): SPlisHSPlasH over Ferro $(col "SPlisHSPlasH WCSPH" cpu_ratio_to_ferro)x with WCSPH, $(col "SPlisHSPlasH DFSPH" cpu_ratio_to_ferro)x with DFSPH."
   echo "- Not matched: SPlisHSPlasH's particle volume is 0.8 d^3 (fixed in its fluid model), so its"
   echo "  block starts 20 % below rest density, falls together and flows with ~1.25x Ferro's neighbours"
-  echo "  per particle; it is built with -march=native (AVX2 kernels), Ferro for generic x86-64 (SSE2);"
-  echo "  its wall particles lie on the box faces, Ferro's half a spacing outside; threads are OpenMP"
-  echo "  (passive waiting) against Ferro's TBB, and OpenMP suffers more on this oversubscribed machine."
+  echo "  per particle, and needs no pressure until it has (DFSPH: 2 iterations per step over the first"
+  echo "  ~20 ms, against Ferro's ~48); it is built with -march=native (AVX2 kernels), Ferro for generic"
+  echo "  x86-64 (SSE2); its threads are OpenMP (passive waiting) against Ferro's TBB, and OpenMP"
+  echo "  suffers more on this oversubscribed machine."
 } > "$out/peer.md"
 
 if [[ -x "$root/scripts/bench/plot.sh" ]]; then
