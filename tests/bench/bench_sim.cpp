@@ -2,10 +2,16 @@
 // count), for each solver, with and without surface tension.
 //
 //   build/bin/bench-sim [--threads 2] [--seconds 0.1] [--warmup 0.05] [--solver all|wcsph|dfsph]
+//                       [--tension all|off|akinci] [--sample 0.005]
 //
 // Prints milliseconds per step, the mean solver iterations, wall seconds per simulated
-// second (what a shot costs), and how many steps one neighbour search lasts (WCSPH keeps
-// a Verlet skin; DFSPH searches every step).
+// second (what a shot costs), how many steps one neighbour search lasts (WCSPH keeps
+// a Verlet skin; DFSPH searches every step), and two density errors: the mean of what the
+// solver reports per step (DFSPH: its final mean residual; WCSPH: the mean compression),
+// and the mean compression max(0, rho / rho0 - 1) over the particles, read from the
+// densities after the first step past every `--sample` seconds (how scripts/bench-peer.sh
+// measures SPlisHSPlasH from its exported densities, so both codes are held to one measure).
+// Only the steps are timed, not the sampling.
 #include "sim/sph/FluidSimulation.hpp"
 
 #include <tbb/global_control.h>
@@ -39,6 +45,15 @@ SimScene damBreak40k(const std::string& kind, double surfaceTension) {
     return s;
 }
 
+/// Mean compression max(0, rho / rho0 - 1) over the fluid particles, from the densities of
+/// the last neighbour update (the same lag as SPlisHSPlasH's exported densities: both are
+/// the densities the last step started from).
+double meanCompression(const FluidSimulation& sim) {
+    double sum = 0;
+    for (Real rho : sim.densities()) sum += std::max(0.0, double(rho) / sim.restDensity() - 1);
+    return sum / double(std::max<size_t>(sim.size(), 1));
+}
+
 } // namespace
 
 bool isPressureSolver(const std::string& name) {
@@ -49,49 +64,85 @@ bool isPressureSolver(const std::string& name) {
 int main(int argc, char** argv) {
     int threads = 2;
     double seconds = 0.1, warmup = 0.05;
-    std::string solver = "all";
+    double sample = 0.005;
+    std::string solver = "all", tension = "all";
+    const char* usage = "usage: bench-sim [--threads N] [--seconds S] [--warmup S] [--solver all|wcsph|dfsph] "
+                        "[--tension all|off|akinci] [--sample S]\n";
+    if (argc % 2 == 0) {
+        std::fputs(usage, stderr);
+        return 2;
+    }
     for (int i = 1; i + 1 < argc; i += 2) {
         if (!std::strcmp(argv[i], "--threads")) threads = std::atoi(argv[i + 1]);
         else if (!std::strcmp(argv[i], "--seconds")) seconds = std::atof(argv[i + 1]);
         else if (!std::strcmp(argv[i], "--warmup")) warmup = std::atof(argv[i + 1]);
         else if (!std::strcmp(argv[i], "--solver")) solver = argv[i + 1];
+        else if (!std::strcmp(argv[i], "--tension")) tension = argv[i + 1];
+        else if (!std::strcmp(argv[i], "--sample")) sample = std::atof(argv[i + 1]);
         else {
-            std::fprintf(stderr, "usage: bench-sim [--threads N] [--seconds S] [--warmup S] [--solver all|wcsph|dfsph]\n");
+            std::fputs(usage, stderr);
             return 2;
         }
     }
-    if (threads < 1 || !(seconds > 0) || !(warmup >= 0) || (solver != "all" && !isPressureSolver(solver))) {
-        std::fprintf(stderr, "bench-sim: error: --threads >= 1, --seconds > 0, --warmup >= 0, --solver all or a registered solver (wcsph, dfsph)\n");
+    if (threads < 1 || !(seconds > 0) || !(warmup >= 0) || !(sample > 0) ||
+        (solver != "all" && !isPressureSolver(solver)) ||
+        (tension != "all" && tension != "off" && tension != "akinci")) {
+        std::fprintf(stderr, "bench-sim: error: --threads >= 1, --seconds > 0, --warmup >= 0, --sample > 0, --solver all or a "
+                             "registered solver (wcsph, dfsph), --tension all, off or akinci\n");
         return 2;
     }
     tbb::global_control limit(tbb::global_control::max_allowed_parallelism, size_t(threads));
     std::printf("bench-sim: 40,960-particle dam break, %d threads, %.3f simulated s after %g s warm-up\n",
                 threads, seconds, warmup);
-    std::printf("reproduce: build/bin/bench-sim --threads %d --seconds %g --warmup %g --solver %s\n\n", threads,
-                seconds, warmup, solver.c_str());
-    std::printf("%-7s %-8s %8s %10s %10s %12s %10s %12s\n", "solver", "tension", "steps", "ms/step", "dt [ms]",
-                "wall s/sim s", "iter p/d", "steps/search");
+    std::printf("reproduce: build/bin/bench-sim --threads %d --seconds %g --warmup %g --solver %s --tension %s --sample %g\n",
+                threads, seconds, warmup, solver.c_str(), tension.c_str(), sample);
+    {
+        // The scene's derived settings, one parseable line (scripts/bench-peer.sh gives the
+        // same ones to SPlisHSPlasH): viscosity is fluid plus artificial, c is WCSPH's sound speed.
+        const FluidSimulation probe(damBreak40k("dfsph", 0.0));
+        const SolverParams& sp = probe.scene().solver;
+        std::printf("scene: particles=%zu spacing=%g support=%g rho0=%g nu=%.6g c=%.6g cfl=%g max_dt=%g "
+                    "density_tol=%g divergence_tol=%g max_iterations=%d gravity=%g\n\n",
+                    probe.size(), probe.spacing(), probe.supportRadius(), probe.restDensity(), probe.viscosity(),
+                    probe.soundSpeed(), sp.cfl, sp.maxDt, sp.maxDensityError, sp.maxDivergenceError, sp.maxIterations,
+                    sp.gravity.norm());
+    }
+    // The last two columns (added after the others, so that column positions stay) are
+    // density errors in percent: the solver's own per-step figure and the sampled compression.
+    std::printf("%-7s %-8s %8s %10s %10s %12s %10s %12s %9s %9s\n", "solver", "tension", "steps", "ms/step", "dt [ms]",
+                "wall s/sim s", "iter p/d", "steps/search", "err %", "rho err %");
     for (const std::string& kind : pressureSolverNames()) {
         if (solver != "all" && kind != solver) continue;
         for (double sigma : {0.0, 0.072}) {
+            if ((tension == "off" && sigma > 0) || (tension == "akinci" && sigma == 0)) continue;
             FluidSimulation sim(damBreak40k(kind, sigma));
             sim.advanceTo(warmup);
             const size_t steps0 = sim.stepCount(), searches0 = sim.lastStep().searches;
             long iterP = 0, iterD = 0;
-            const auto t0 = std::chrono::steady_clock::now();
+            double solverError = 0, sampledError = 0, wall = 0;
+            int samples = 0;
+            double nextSample = warmup + sample;
             while (sim.time() < warmup + seconds - 1e-12) {
+                const auto t0 = std::chrono::steady_clock::now();
                 sim.step(warmup + seconds - sim.time());
+                wall += std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
                 iterP += sim.lastStep().pressureIterations;
                 iterD += sim.lastStep().divergenceIterations;
+                solverError += sim.lastStep().densityError;
+                if (sim.time() >= nextSample - 1e-12) {
+                    sampledError += meanCompression(sim);
+                    ++samples;
+                    while (nextSample <= sim.time() + 1e-12) nextSample += sample;
+                }
             }
-            const double wall = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
             const size_t steps = sim.stepCount() - steps0;
             const size_t searches = sim.lastStep().searches - searches0;
-            std::printf("%-7s %-8s %8zu %10.2f %10.3f %12.1f %5.1f/%.1f %12.1f\n",
+            std::printf("%-7s %-8s %8zu %10.2f %10.3f %12.1f %5.1f/%.1f %12.1f %9.4f %9.4f\n",
                         sim.pressureSolverLabel(), sigma > 0 ? "Akinci" : "off", steps,
                         1e3 * wall / double(steps), 1e3 * seconds / double(steps), wall / seconds,
                         double(iterP) / double(steps), double(iterD) / double(steps),
-                        double(steps) / double(std::max<size_t>(searches, 1)));
+                        double(steps) / double(std::max<size_t>(searches, 1)),
+                        100 * solverError / double(steps), 100 * sampledError / double(std::max(samples, 1)));
         }
     }
     return 0;
