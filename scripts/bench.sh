@@ -93,7 +93,8 @@ guide() {
 Where a frame's time goes, at the report's frame (10,240 particles; CPU seconds): the surface
 $(num "$sf") s, the spikes $(num "$sp_final") s at the defaults, the render about $(num "$x16") s at 640x480 with the
 defaults ($(num "$aa_def") s measured at 160x120, times 16 pixels). The render dominates; the simulation's
-cost per frame is in the sim section (and its presets keys are still placeholders, see below).
+cost per frame is in the sim section: the particle spacing sets the heap's accuracy, the
+pressure solver's tolerance mostly how still a resting pool stands (preview relaxes it).
 
 - **Preview** (motion, framing, timing): \`scripts/shot.sh SCENE OUT --preset preview\`. 320x240,
   +Q8, no anti-aliasing: about $(num "$x4") CPU s a frame ($(num "$aa_off") s at 160x120, times 4), image RMSE
