@@ -253,16 +253,26 @@ TEST_CASE("extremes: magnets touching the dish and inside the fluid (issue 15)",
         return [name](const std::vector<std::string>& frames) { checkEnergyNeverRises(name, frames, 0.02); };
     };
     // 20 frames (0.2 s): the old pumping showed from 0.05-0.15 s on. About 15 s of CPU.
+    // The energy rows use the `external` solver: its force is exactly mu0 grad F(|H|) / rho0
+    // of the header's magnets, so mechanicalEnergy() is the force's own potential. With the
+    // self-consistent solvers the force's potential is the solve's fitted curve G(|H|)
+    // (sim/magnetics/DemagnetizationCurve), which the particle file does not carry (against
+    // F: up to 2.4 % of the energy released, the loop); those run the same magnets below.
+    const std::string external = "--set magnetization.solver=\"external\"";
+    const std::string touching = dipole(0.0, 1.0), inside = dipole(0.002, 1.0), weak = dipole(0.002, 0.01);
+    const std::string bar = "[[magnets]]\nkind = \"bar\"\nposition = [0, 0, 0]\nlength = 0.004\npole_strength = 50\n";
+    const std::string loop = "[[magnets]]\nkind = \"loop\"\nposition = [0, 0, 0.002]\nradius = 0.005\ncurrent = 1000\n";
     const std::vector<Row> rows = {
-        {"dipole touching the floor", dipole(0.0, 1.0), "", Expect::Stable, 20, energy("dipole touching the floor")},
-        {"dipole inside the fluid", dipole(0.002, 1.0), "", Expect::Stable, 20, energy("dipole inside the fluid")},
-        {"weak dipole inside the fluid", dipole(0.002, 0.01), "", Expect::Stable, 20,
-         energy("weak dipole inside the fluid")},
-        {"bar pole inside the fluid",
-         "[[magnets]]\nkind = \"bar\"\nposition = [0, 0, 0]\nlength = 0.004\npole_strength = 50\n", "",
-         Expect::Stable, 20, energy("bar pole inside the fluid")},
-        {"loop through the fluid", "[[magnets]]\nkind = \"loop\"\nposition = [0, 0, 0.002]\nradius = 0.005\ncurrent = 1000\n",
-         "", Expect::Stable, 20, energy("loop through the fluid")},
+        {"dipole touching the floor", touching, external, Expect::Stable, 20, energy("dipole touching the floor")},
+        {"dipole inside the fluid", inside, external, Expect::Stable, 20, energy("dipole inside the fluid")},
+        {"weak dipole inside the fluid", weak, external, Expect::Stable, 20, energy("weak dipole inside the fluid")},
+        {"bar pole inside the fluid", bar, external, Expect::Stable, 20, energy("bar pole inside the fluid")},
+        {"loop through the fluid", loop, external, Expect::Stable, 20, energy("loop through the fluid")},
+        // The default (self-consistent) solver: runs to the end, finite, inside, not compressed.
+        {"dipole touching the floor (auto)", touching, "", Expect::Stable, 10},
+        {"dipole inside the fluid (auto)", inside, "", Expect::Stable, 10},
+        {"bar pole inside the fluid (auto)", bar, "", Expect::Stable, 10},
+        {"loop through the fluid (auto)", loop, "", Expect::Stable, 10},
     };
     for (const Row& row : rows) runRow(row);
 }
