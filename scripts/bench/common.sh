@@ -85,3 +85,14 @@ bench_settled_frame() {
 
 # bench_plot CSV XCOL YCOL NAME TITLE: $out/NAME.png through plot.sh.
 bench_plot() { "$root/scripts/bench/plot.sh" "$1" "$2" "$3" "$out/$4.png" "$5"; }
+
+# Markdown helpers of the sections: numbers to 3 significant digits ("?" when missing),
+# metres as mm, a CSV as a Markdown table (all columns but the last, the reference), and
+# column C of the row whose first field is WANT.
+mm() { awk -v x="$1" 'BEGIN { if (x == "") print "?"; else printf "%.3g mm", 1000 * x }'; }
+r3() { awk -v x="$1" 'BEGIN { if (x == "") print "?"; else printf "%.3g", x }'; }
+table() {
+  awk -F, 'NR == 1 { h = "|"; s = "|"; for (i = 1; i < NF; ++i) { h = h " " $i " |"; s = s " --- |" }; print h; print s; next }
+           { r = "|"; for (i = 1; i < NF; ++i) r = r " " $i " |"; print r }' "$1"
+}
+col() { awk -F, -v want="$2" -v c="$3" 'NR > 1 && $1 == want { print $c }' "$1"; }

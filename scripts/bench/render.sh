@@ -81,12 +81,6 @@ header="setting,options,cpu_seconds,rmse,reference"
 bench_plot "$out/render_quality.csv" cpu_seconds rmse render_quality "POV-Ray quality (+Q): image RMSE vs +Q11 +A0.02 +R4, ${width}x${height}"
 bench_plot "$out/render_antialias.csv" cpu_seconds rmse render_antialias "POV-Ray anti-aliasing at +Q9: image RMSE vs +Q11 +A0.02 +R4, ${width}x${height}"
 
-r3() { awk -v x="$1" 'BEGIN { if (x == "") print "?"; else printf "%.3g", x }'; }
-table() {
-  awk -F, 'NR == 1 { h = "|"; s = "|"; for (i = 1; i < NF; ++i) { h = h " " $i " |"; s = s " --- |" }; print h; print s; next }
-           { r = "|"; for (i = 1; i < NF; ++i) r = r " " $i " |"; print r }' "$1"
-}
-col() { awk -F, -v want="$2" -v c="$3" 'NR > 1 && $1 == want { print $c }' "$1"; }
 q1="$out/render_quality.csv" a1="$out/render_antialias.csv"
 {
   echo "## Render: POV-Ray quality and anti-aliasing"

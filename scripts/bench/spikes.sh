@@ -68,13 +68,6 @@ bench_plot "$out/spikes_remesh_iterations.csv" cpu_seconds tip_mean_distance_m s
 } > "$out/spikes_presets.csv"
 bench_plot "$out/spikes_presets.csv" cpu_seconds tip_mean_distance_m spikes_presets "ferro-spikes at the presets' resolution / remesh_iterations"
 
-mm() { awk -v x="$1" 'BEGIN { if (x == "") print "?"; else printf "%.3g mm", 1000 * x }'; }
-r3() { awk -v x="$1" 'BEGIN { if (x == "") print "?"; else printf "%.3g", x }'; }
-table() {
-  awk -F, 'NR == 1 { h = "|"; s = "|"; for (i = 1; i < NF; ++i) { h = h " " $i " |"; s = s " --- |" }; print h; print s; next }
-           { r = "|"; for (i = 1; i < NF; ++i) r = r " " $i " |"; print r }' "$1"
-}
-col() { awk -F, -v want="$2" -v c="$3" 'NR > 1 && $1 == want { print $c }' "$1"; }
 r1="$out/spikes_resolution.csv" i1="$out/spikes_remesh_iterations.csv"
 {
   echo "## Spikes: refinement"

@@ -78,13 +78,6 @@ elif [[ $quick == 1 ]]; then
 fi
 
 # ---- the Markdown section ----
-mm() { awk -v x="$1" 'BEGIN { if (x == "") print "?"; else printf "%.3g mm", 1000 * x }'; }
-r3() { awk -v x="$1" 'BEGIN { if (x == "") print "?"; else printf "%.3g", x }'; }
-table() { # CSV -> Markdown table (all columns but the reference)
-  awk -F, 'NR == 1 { h = "|"; s = "|"; for (i = 1; i < NF; ++i) { h = h " " $i " |"; s = s " --- |" }; print h; print s; next }
-           { r = "|"; for (i = 1; i < NF; ++i) r = r " " $i " |"; print r }' "$1"
-}
-col() { awk -F, -v want="$2" -v c="$3" 'NR > 1 && $1 == want { print $c }' "$1"; }
 v1="$out/surface_voxel.csv" m1="$out/surface_method.csv"
 {
   echo "## Surface: method and voxel size"
