@@ -104,14 +104,23 @@ def blocks(h):
     return {k: sum(v) / len(v) for k, v in out.items() if len(v) >= 8}
 
 
-def peaks(h, mean, s):
+def smoothed(h):
+    """h averaged over the 3 x 3 columns around each column (those present)."""
+    out = {}
+    for (i, j) in h:
+        v = [h[(i + a, j + b)] for a in (-1, 0, 1) for b in (-1, 0, 1) if (i + a, j + b) in h]
+        out[(i, j)] = sum(v) / len(v)
+    return out
+
+
+def peaks(h, mean, s, height=1.0, reach=2):
     out = []
     for (i, j), z in h.items():
-        if z < mean + s:
+        if z < mean + height * s:
             continue
         best = True
-        for di in range(-2, 3):
-            for dj in range(-2, 3):
+        for di in range(-reach, reach + 1):
+            for dj in range(-reach, reach + 1):
                 if (di or dj) and h.get((i + di, j + dj), -1e9) > z:
                     best = False
         if best:
@@ -149,6 +158,7 @@ def main():
     ap.add_argument("--rho", type=float, default=1200.0)
     ap.add_argument("--g", type=float, default=9.81)
     ap.add_argument("--spectrum", action="store_true")
+    ap.add_argument("--smooth", action="store_true", help="peaks on the 3x3-column average")
     ap.add_argument("--detrend", action="store_true", help="subtract the ring-mean height (axisymmetric part)")
     a = ap.parse_args()
     lam_c = 2 * math.pi * math.sqrt(a.sigma / (a.rho * a.g))
@@ -178,7 +188,12 @@ def main():
         d = [b[k] - b0[k] for k in common]
         dmean = sum(d) / max(len(d), 1)
         dh = math.sqrt(sum((x - dmean) ** 2 for x in d) / max(len(d), 1))
-        pk = peaks(h, mean, s)
+        # Peaks: on single column tops (at least one spacing above the mean, highest of the
+        # 5 x 5 columns around), or with --smooth on the 3 x 3 column average (at least half a
+        # spacing above the mean, highest of the 7 x 7 columns around: crests closer than
+        # 3 columns = lambda_c / 2.5 at the example's spacing merge), which column-top jitter
+        # hardly reaches.
+        pk = peaks(smoothed(h), mean, s, 0.5, 3) if a.smooth else peaks(h, mean, s)
         nn = []
         for p in pk:
             d = min((math.hypot(p[0] - q[0], p[1] - q[1]) for q in pk if q is not p), default=None)
