@@ -4,7 +4,7 @@ instability). Pure Python (no numpy on the machine); a 10,240-particle frame tak
 --spectrum ~1 min.
 
     scripts/bench/rosensweig.py FRAMES_DIR --dish RADIUS [--every K] [--margin SPACINGS]
-                                [--detrend] [--spectrum] [--sigma S --rho R --g G]
+                                [--detrend] [--smooth] [--spectrum] [--sigma S --rho R --g G]
 
 The height field h(x, y): the highest particle centre in each column (square cells one
 spacing wide, centred on the seed lattice's columns), columns within `margin` spacings of
@@ -17,8 +17,9 @@ concentration at the dish's edge drives, is not a pattern of peaks. For each fra
   the surface's shape against frame 0 (h averaged over 3 x 3 column blocks, RMS of the
   change about its mean: the mean change is the seed lattice's top layer settling);
   particles with no other particle within the SPH support radius (detached); peaks (local
-  maxima of h over the 5 x 5 columns around them, at least one spacing above the mean) and
-  their median nearest-neighbour distance; with --spectrum the wavelength where the
+  maxima of h over the 5 x 5 columns around them, at least one spacing above the mean; with
+  --smooth of the 3 x 3-column average over the 7 x 7 columns around, at least half a
+  spacing above the mean) and their median nearest-neighbour distance; with --spectrum the wavelength where the
   radially averaged power spectrum of h peaks (4-30 spacings); both against
   lambda_c = 2 pi sqrt(sigma / (rho g)).
 """
