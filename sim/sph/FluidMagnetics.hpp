@@ -53,7 +53,13 @@
 //   potential force: with ~125 Pa of push at the rim of that pool (the heap's rho g dz)
 //   the contact line keeps circulating at 18 mm/s RMS (body model: 0.4 mm/s), and a blob
 //   falling onto a pole gains kinetic energy beyond the magnetic energy released. Until
-//   that is fixed it stays off by default.
+//   that is fixed it stays off by default. On a flat layer in a uniform field (issue 13,
+//   examples/rosensweig_uniform.toml in a 5 cm dish) it drains the layer toward the dish's
+//   edge, where the field concentrates, even below the critical field, and above it breaks
+//   the surface into irregular crests, not a lattice at lambda_c (README, magnetics).
+//   There the re-solve rule is blind: it measures the cache's drift through the magnets'
+//   Jacobian, zero in a uniform field, so only the frame start re-solves the traction's
+//   field; the measurements set magnetization.resolve_every = 2.
 // - A scene without magnets constructs nothing and costs nothing; magnets with a
 //   non-magnetic fluid (susceptibility 0) only report the applied field.
 #include "sim/magnetics/DemagnetizationCurve.hpp"
