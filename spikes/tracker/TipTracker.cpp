@@ -117,8 +117,77 @@ double medianTipSpacing(const std::vector<SpikeTipSample>& tips) {
     return d[d.size() / 2];
 }
 
+namespace {
+
+/// Tips of a matched to tips of b (index into b, or -1), greedily by increasing distance
+/// between a's predicted place and b's tip, each tip used once, only closer than maxD.
+std::vector<int> greedyMatch(const std::vector<Vec3d>& predicted, const std::vector<SpikeTipSample>& b, double maxD) {
+    struct Pair { double d; uint32_t i, j; };
+    std::vector<Pair> pairs;
+    for (uint32_t i = 0; i < predicted.size(); ++i)
+        for (uint32_t j = 0; j < b.size(); ++j) {
+            const double d = (predicted[i] - b[j].position).norm();
+            if (d < maxD) pairs.push_back({d, i, j});
+        }
+    std::sort(pairs.begin(), pairs.end(), [](const Pair& p, const Pair& q) {
+        return p.d < q.d || (p.d == q.d && (p.i < q.i || (p.i == q.i && p.j < q.j)));
+    });
+    std::vector<int> toB(predicted.size(), -1);
+    std::vector<char> usedB(b.size(), 0);
+    for (const Pair& p : pairs) {
+        if (toB[p.i] >= 0 || usedB[p.j]) continue;
+        toB[p.i] = int(p.j);
+        usedB[p.j] = 1;
+    }
+    return toB;
+}
+
+/// Neighbours whose motion predicts a tip's: enough for a least-squares scale, few enough to
+/// stay local (two magnets' patterns contract about different centres).
+constexpr size_t kMotionNeighbours = 8;
+
+/// Where each tip of a is expected in b from the motion of its nearest matched tips: their
+/// least-squares isotropic scale s and shift about their centroids ca, cb, p = cb + s (x - ca).
+/// A single neighbour, or neighbours too close together to fix a scale, give the shift only;
+/// none, the tip where it was. Rotation is left out: between two frames the lattice turns by
+/// far less than the gate, and locally a small turn is a shift.
+std::vector<Vec3d> predictPositions(const std::vector<SpikeTipSample>& a, const std::vector<SpikeTipSample>& b,
+                                    const std::vector<int>& toB, double spacing) {
+    std::vector<uint32_t> matched;
+    for (uint32_t i = 0; i < a.size(); ++i)
+        if (toB[i] >= 0) matched.push_back(i);
+    std::vector<Vec3d> out(a.size());
+    std::vector<std::pair<double, uint32_t>> near;
+    for (uint32_t i = 0; i < a.size(); ++i) {
+        out[i] = a[i].position;
+        if (matched.empty()) continue;
+        near.clear();
+        for (uint32_t k : matched) near.push_back({(a[k].position - a[i].position).squaredNorm(), k});
+        const size_t n = std::min(kMotionNeighbours, near.size());
+        std::partial_sort(near.begin(), near.begin() + long(n), near.end());
+        Vec3d ca = Vec3d::Zero(), cb = Vec3d::Zero();
+        for (size_t k = 0; k < n; ++k) {
+            ca += a[near[k].second].position / double(n);
+            cb += b[size_t(toB[near[k].second])].position / double(n);
+        }
+        double num = 0, den = 0;
+        for (size_t k = 0; k < n; ++k) {
+            const Vec3d da = a[near[k].second].position - ca, db = b[size_t(toB[near[k].second])].position - cb;
+            num += da.dot(db);
+            den += da.squaredNorm();
+        }
+        // A scale needs neighbours spread over about a spacing; it is kept to a plausible
+        // range (a lattice does not halve or double its spacing in one frame).
+        const double scale = n >= 3 && den > double(n) * 0.25 * spacing * spacing ? std::clamp(num / den, 0.8, 1.25) : 1.0;
+        out[i] = cb + scale * (a[i].position - ca);
+    }
+    return out;
+}
+
+} // namespace
+
 TipFrameMatch matchTips(const std::vector<SpikeTipSample>& a, const std::vector<SpikeTipSample>& b, double gate,
-                        double edgeFraction) {
+                        double edgeFraction, bool predict) {
     TipFrameMatch m;
     m.tipsA = int(a.size());
     m.tipsB = int(b.size());
@@ -129,32 +198,50 @@ TipFrameMatch matchTips(const std::vector<SpikeTipSample>& a, const std::vector<
     m.largestTip = std::max(hA, hB);
     if (a.empty() && b.empty()) return m;
 
-    struct Pair { double d; uint32_t i, j; };
-    std::vector<Pair> pairs;
     const double maxD = m.spacing > 0 ? gate * m.spacing : std::numeric_limits<double>::infinity();
-    for (uint32_t i = 0; i < a.size(); ++i)
-        for (uint32_t j = 0; j < b.size(); ++j) {
-            const double d = (a[i].position - b[j].position).norm();
-            if (d < maxD) pairs.push_back({d, i, j});
+    std::vector<Vec3d> predicted(a.size());
+    for (size_t i = 0; i < a.size(); ++i) predicted[i] = a[i].position;
+    std::vector<int> toB;
+    if (predict && m.spacing > 0) {
+        // Seeds: tips that moved less than a quarter spacing. Only there is the nearest tip
+        // surely the same one; a lattice contracting by 8 % a frame moves its sixth ring by
+        // 0.48 l, and there a's tip is nearer to b's seventh-ring tip than to its own. From
+        // the seeds the prediction grows outward: each round predicts every tip from the
+        // matched ones and keeps the matches within a quarter spacing of the prediction,
+        // until no more tips are added; the last prediction is matched within the gate.
+        const double seedD = std::min(0.25, 0.5 * gate) * m.spacing;
+        toB = greedyMatch(predicted, b, seedD);
+        auto count = [](const std::vector<int>& v) { return std::count_if(v.begin(), v.end(), [](int j) { return j >= 0; }); };
+        for (int round = 0; round < 64 && count(toB) > 0; ++round) {
+            const std::vector<Vec3d> next = predictPositions(a, b, toB, m.spacing);
+            std::vector<int> nextToB = greedyMatch(next, b, seedD);
+            predicted = next;
+            if (count(nextToB) <= count(toB)) break;
+            toB = std::move(nextToB);
         }
-    std::sort(pairs.begin(), pairs.end(), [](const Pair& p, const Pair& q) { return p.d < q.d; });
-    std::vector<char> usedA(a.size(), 0), usedB(b.size(), 0);
+    }
+    toB = greedyMatch(predicted, b, maxD);
+
+    std::vector<char> usedB(b.size(), 0);
     std::vector<double> moves;
     int stable = 0, interior = 0, interiorStable = 0;
     const auto inside = [&](double h, double hmax) { return h >= edgeFraction * hmax; };
-    for (const Pair& p : pairs) {
-        if (usedA[p.i] || usedB[p.j]) continue;
-        usedA[p.i] = usedB[p.j] = 1;
-        moves.push_back(p.d);
-        if (p.d < 0.1 * m.spacing) ++stable;
-        if (inside(a[p.i].height, hA) || inside(b[p.j].height, hB)) {
+    for (uint32_t i = 0; i < a.size(); ++i) {
+        if (toB[i] < 0) continue;
+        const size_t j = size_t(toB[i]);
+        usedB[j] = 1;
+        const double d = (a[i].position - b[j].position).norm();
+        moves.push_back(d);
+        m.maxResidual = std::max(m.maxResidual, (predicted[i] - b[j].position).norm());
+        if (d < 0.1 * m.spacing) ++stable;
+        if (inside(a[i].height, hA) || inside(b[j].height, hB)) {
             ++interior;
-            interiorStable += p.d < 0.1 * m.spacing;
+            interiorStable += d < 0.1 * m.spacing;
         }
-        m.maxHeightJump = std::max(m.maxHeightJump, std::abs(a[p.i].height - b[p.j].height));
+        m.maxHeightJump = std::max(m.maxHeightJump, std::abs(a[i].height - b[j].height));
     }
     for (uint32_t i = 0; i < a.size(); ++i)
-        if (!usedA[i]) {
+        if (toB[i] < 0) {
             ++m.died;
             m.interiorDied += inside(a[i].height, hA);
             interior += inside(a[i].height, hA);
@@ -180,7 +267,7 @@ TipFrameMatch matchTips(const std::vector<SpikeTipSample>& a, const std::vector<
 }
 
 TipTrack trackTips(const std::string& spikyPattern, const std::string& surfacePattern, int first, int last,
-                   const TipFinderParams& params, double gate, double edgeFraction) {
+                   const TipFinderParams& params, double gate, double edgeFraction, bool predict) {
     TipTrack track;
     track.first = first;
     for (int f = first; f <= last; ++f) {
@@ -188,7 +275,7 @@ TipTrack trackTips(const std::string& spikyPattern, const std::string& surfacePa
         const TriangleMesh surface = readMesh(framePath(surfacePattern, f));
         track.tips.push_back(findTips(spiky, surface, params));
         if (track.tips.size() >= 2)
-            track.steps.push_back(matchTips(track.tips[track.tips.size() - 2], track.tips.back(), gate, edgeFraction));
+            track.steps.push_back(matchTips(track.tips[track.tips.size() - 2], track.tips.back(), gate, edgeFraction, predict));
     }
     return track;
 }
@@ -196,15 +283,14 @@ TipTrack trackTips(const std::string& spikyPattern, const std::string& surfacePa
 std::string tipTrackCsv(const TipTrack& track) {
     std::ostringstream o;
     o << "frame,tips,matched,born,died,interior_born,interior_died,spacing_mm,median_move_mm,max_move_mm,"
-         "stable_fraction,interior_stable_fraction,max_height_jump,largest_tip_mm\n";
+         "stable_fraction,interior_stable_fraction,max_height_jump,largest_tip_mm,max_residual_mm\n";
     for (size_t k = 0; k < track.steps.size(); ++k) {
         const TipFrameMatch& m = track.steps[k];
         char row[256];
-        std::snprintf(row, sizeof row, "%d,%d,%d,%d,%d,%d,%d,%.4f,%.4f,%.4f,%.4f,%.4f,%.4f,%.4f\n",
+        std::snprintf(row, sizeof row, "%d,%d,%d,%d,%d,%d,%d,%.4f,%.4f,%.4f,%.4f,%.4f,%.4f,%.4f,%.4f\n",
                       track.first + int(k) + 1, m.tipsB, m.matched, m.born, m.died, m.interiorBorn, m.interiorDied,
                       1e3 * m.spacing, 1e3 * m.medianMove, 1e3 * m.maxMove, m.stableFraction, m.interiorStableFraction,
-                      m.maxHeightJump,
-                      1e3 * m.largestTip);
+                      m.maxHeightJump, 1e3 * m.largestTip, 1e3 * m.maxResidual);
         o << row;
     }
     return o.str();

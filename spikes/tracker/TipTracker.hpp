@@ -54,12 +54,28 @@ struct TipFrameMatch {
     /// height (a tip that appears 3 mm tall jumped 3 mm).
     double maxHeightJump = 0;
     double largestTip = 0;      ///< the larger of the two frames' largest tip heights [m]
+    /// Largest distance of a matched tip of b from where the motion of its matched neighbours
+    /// predicted it [m] (the raw move when matching without prediction).
+    double maxResidual = 0;
 };
 
 /// Matches b's tips to a's: pairs in order of increasing distance, each tip used once, only
 /// pairs closer than `gate` x l (l = the spacing of a, else of b).
+///
+/// With `predict`, the distance is taken from where a's tip is expected in b: the pattern
+/// contracts as the field grows (l = alpha / |H|, a few % a frame on an approaching magnet)
+/// and slides with a moving magnet, so tips ten rings out move more than half a spacing in one
+/// frame while moving continuously; matched without prediction they counted as a death and a
+/// birth at full height. The prediction is a local similarity (isotropic scale and shift,
+/// least squares) of the motion of the tip's kMotionNeighbours nearest matched tips. It starts
+/// from the tips that moved less than a quarter spacing (there the nearest tip is surely the
+/// same one) and grows outward round by round, keeping matches within a quarter spacing of
+/// the prediction, until no tip is added; then every tip is matched from its prediction
+/// within the gate. A tip that really appears, vanishes or jumps against its neighbours
+/// still falls outside the gate. Moves (and the 0.1 l stability) stay the raw distances a
+/// tip travelled.
 TipFrameMatch matchTips(const std::vector<SpikeTipSample>& a, const std::vector<SpikeTipSample>& b,
-                        double gate = 0.5, double edgeFraction = 0.25);
+                        double gate = 0.5, double edgeFraction = 0.25, bool predict = true);
 
 /// A shot's tips over a frame range: the tips of every frame and the match of each frame to
 /// the next.
@@ -73,12 +89,12 @@ struct TipTrack {
 /// placeholders, as every stage takes them) and tracks their tips. Throws MeshFileError
 /// (missing 4 / malformed 2) at the first frame that cannot be read.
 TipTrack trackTips(const std::string& spikyPattern, const std::string& surfacePattern, int first, int last,
-                   const TipFinderParams& params = {}, double gate = 0.5, double edgeFraction = 0.25);
+                   const TipFinderParams& params = {}, double gate = 0.5, double edgeFraction = 0.25,
+                   bool predict = true);
 
 /// The track as CSV: one row per step (frame, tips, matched, born, died, interior_born,
 /// interior_died, spacing_mm, median_move_mm, max_move_mm, stable_fraction, interior_stable_fraction,
-/// max_height_jump,
-/// largest_tip_mm).
+/// max_height_jump, largest_tip_mm, max_residual_mm).
 std::string tipTrackCsv(const TipTrack& track);
 
 } // namespace ferro

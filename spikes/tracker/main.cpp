@@ -31,12 +31,15 @@ int main(int argc, char** argv) {
         ->check(CLI::PositiveNumber);
     app.add_option("--gate", gate, "match tips closer than this many tip spacings (default 0.5)")
         ->check(CLI::PositiveNumber);
+    bool noPredict = false;
+    app.add_flag("--no-predict", noPredict,
+                 "match by raw distance, not from where the neighbours' motion (scale and shift) puts a tip");
     app.add_option("--edge", edge, "born/died tips at least this fraction of the largest tip count as interior (0.25)")
         ->check(CLI::Range(0.0, 1.0));
     const std::vector<ErrorExit> errors = {exitOn<std::exception>(kExitFailure, "", oneLine)};
     return runCommandLine("ferro-tips", app, argc, argv, errors, [&] {
         const FrameRange range = frameRangeArgument("--frames", frames);
-        const TipTrack track = trackTips(spiky, surface, range.first, range.last, params, gate, edge);
+        const TipTrack track = trackTips(spiky, surface, range.first, range.last, params, gate, edge, !noPredict);
         const std::string table = tipTrackCsv(track);
         if (!csv.empty()) {
             std::ofstream out(csv);

@@ -113,3 +113,44 @@ TEST_CASE("matchTips counts matches, moves, births and deaths of known tip sets"
         REQUIRE(m.matched == 0);
     }
 }
+
+TEST_CASE("matchTips follows a contracting or sliding lattice and still catches a tip that jumps", "[tips]") {
+    // A hexagonal patch of 8 rings (217 tips) 3 mm apart, all 3 mm tall.
+    const double l = 3e-3;
+    std::vector<SpikeTipSample> a;
+    for (int i = -8; i <= 8; ++i)
+        for (int j = -8; j <= 8; ++j)
+            if (std::abs(i) <= 8 && std::abs(j) <= 8 && std::abs(i + j) <= 8)
+                a.push_back(sample(l * (i + 0.5 * j), l * std::sqrt(0.75) * j, 3e-3));
+    REQUIRE(a.size() == 217);
+    SECTION("contracting by 8 % about the centre: the outer rings move up to 0.64 spacing, all matched") {
+        std::vector<SpikeTipSample> b = a;
+        for (auto& t : b) t.position.head<2>() *= 0.92;
+        const TipFrameMatch raw = matchTips(a, b, 0.5, 0.25, false);
+        REQUIRE(raw.born > 0);   // without prediction the outer rings are deaths and births
+        const TipFrameMatch m = matchTips(a, b);
+        REQUIRE(m.matched == 217);
+        REQUIRE(m.born + m.died == 0);
+        REQUIRE(m.maxMove == Approx(0.08 * 8 * l).epsilon(1e-6));
+        REQUIRE(m.maxResidual < 1e-9);
+        REQUIRE(m.maxHeightJump == 0);
+    }
+    SECTION("sliding by 0.2 spacing while contracting by 5 %: the outer rings move up to 0.6 spacing, all matched") {
+        std::vector<SpikeTipSample> b = a;
+        for (auto& t : b) {
+            t.position.head<2>() *= 0.95;
+            t.position.x() += 0.2 * l;
+        }
+        const TipFrameMatch m = matchTips(a, b);
+        REQUIRE(m.matched == 217);
+        REQUIRE(m.born + m.died == 0);
+    }
+    SECTION("one tip jumps 0.6 spacing while its neighbours stay: a death and a birth") {
+        std::vector<SpikeTipSample> b = a;
+        b[100].position.x() += 0.6 * l;
+        const TipFrameMatch m = matchTips(a, b);
+        REQUIRE(m.matched == 216);
+        REQUIRE(m.born == 1);
+        REQUIRE(m.died == 1);
+    }
+}
