@@ -142,6 +142,16 @@ public:
     }
     Eigen::Vector3d fieldAtParticleTree(size_t k) const;
 
+    /// Local consistency correction (smoothed model only; see the file comment): measures
+    /// the field operator's particle-scale noise for a uniform magnetization (three field
+    /// evaluations, tree if useTree and the build has lists, else exact) and from then on
+    /// every particle-centre field (fieldAtParticles, fieldAtParticle*) subtracts it.
+    /// build() clears it. Keeps the magnetization set before the call.
+    void computeLocalCorrection(bool useTree);
+    bool hasLocalCorrection() const { return !localCorrection_.empty(); }
+    /// Support of the neighbour mean in computeLocalCorrection, in particle supports.
+    static constexpr double kCorrectionReach = 2.0;
+
     /// Field [A/m] and its Jacobian [A/m^2] at an arbitrary point p [m], double precision:
     /// tree traversal with the opening angle of build() (exact sum if it was 0): the smoothed
     /// field, without the surface term. Sphere model: a point inside a particle's sphere gets
@@ -197,6 +207,7 @@ private:
     std::vector<float> px_, py_, pz_, a2_, ainv_, vol_; // a2_, ainv_: core radius^2, 1 / core radius
     std::vector<float> mx_, my_, mz_;  // moments V M (scaled volume), set by setMagnetization
     std::vector<float> surfaceWeight_, surfaceNormal_; // per particle w = max(0, 1 - n), outward normal (3)
+    std::vector<float> localCorrection_; // per particle D_k (9, row-major), see computeLocalCorrection
     std::vector<Node> nodes_;
     std::vector<float> cell_;            // per cell: moment, quadrupole, octupole (see .cpp)
     std::vector<uint32_t> leaves_;       // node index of each leaf, increasing begin

@@ -26,6 +26,12 @@ struct MagnetizationParams {
     /// error at chi0 = 10 on a settled SPH ball (a wider surface layer). 0 = the older
     /// model: uniformly magnetized spheres of volume V, exact on a cubic lattice only.
     double smoothing = 2.5;
+    /// Local consistency correction of the smoothed model (sim/magnetics/DipoleTree.hpp):
+    /// each interior particle's field operator is corrected so that a uniform magnetization
+    /// gives a field without particle-scale noise. Costs three field evaluations per solve.
+    /// Measured on a ball jittered by 0.2 spacings at chi0 = 10: 11.5 % RMS field error per
+    /// particle without it, 2.3 % with it; on a ball cut from a settled SPH tank 0.9 -> 0.8 %.
+    bool localCorrection = true;
     /// How the magnetic force enters the fluid (sim/sph/FluidMagnetics.hpp has the
     /// derivation):
     ///   Body     (default) a body force mu0 (M . grad) H_magnets per particle from the

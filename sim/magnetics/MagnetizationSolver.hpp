@@ -46,6 +46,8 @@
 
 #include <Eigen/Core>
 
+#include <memory>
+#include <mutex>
 #include <optional>
 #include <vector>
 
@@ -156,8 +158,11 @@ class ParticleFieldEvaluator {
 public:
     /// Builds the tree. openingAngle 0 = exact sums (O(N) per point), default 0.5.
     /// smoothing: the particle model, as MagnetizationParams::smoothing (pass the solver's).
+    /// localCorrection: as MagnetizationParams::localCorrection (pass the solver's), used by
+    /// inducedFieldAtParticle() only.
     void build(const std::vector<Vec3>& x, const std::vector<Real>& volume, const std::vector<Vec3>& M,
-               double openingAngle = 0.5, double smoothing = DipoleTree::kDefaultSmoothing);
+               double openingAngle = 0.5, double smoothing = DipoleTree::kDefaultSmoothing,
+               bool localCorrection = true);
     /// Field of the magnetized particles at p [m] -> [A/m].
     Vec3d inducedField(const Vec3d& p) const { return tree_.fieldAt(p); }
     /// Jacobian dH_a/dx_b [A/m^2] of the particle field at p.
@@ -165,16 +170,19 @@ public:
     /// Exact all-particle sum at p (reference, O(N)).
     Vec3d inducedFieldExact(const Vec3d& p) const { return tree_.fieldAtDirect(p); }
     /// The particle field the solver uses at particle i (index into build()'s x): exact sum,
-    /// O(N), including the surface sampling term.
-    Vec3d inducedFieldAtParticle(size_t i) const { return tree_.fieldAtParticleDirect(sorted_[i]); }
+    /// O(N), including the surface sampling term and the local correction (computed at the
+    /// first call: three field evaluations).
+    Vec3d inducedFieldAtParticle(size_t i) const;
     size_t size() const { return tree_.size(); }
     /// Total moment sum V M [A m^2] and volume centroid [m]: the far field is that dipole.
     Vec3d totalMoment() const { return tree_.totalMoment(); }
     Vec3d centroid() const { return tree_.centroid(); }
 
 private:
-    DipoleTree tree_;
+    mutable DipoleTree tree_;      // mutable: the local correction is computed on first use
     std::vector<uint32_t> sorted_; // sorted_[i] = tree place of input particle i
+    bool correct_ = true;
+    mutable std::unique_ptr<std::once_flag> corrected_;
 };
 
 /// H [A/m] at p: magnets plus magnetized particles.
