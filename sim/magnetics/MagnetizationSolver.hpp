@@ -7,7 +7,9 @@
 // uniformly magnetized sphere of volume V_i, the older model). sim/magnetics/DipoleTree.hpp
 // has the closed-form field, why it gives the macroscopic field on disordered particle sets
 // and the surface term S_i. The field at particle i is
-//     H_i = H_ext(x_i) + sum_j G(x_i - x_j) V_j M_j - S_i M_i   (j = i included: -W(0) V_i M_i / 3)
+//     H_i = H_ext(x_i) + sum_j G(x_i - x_j) V_j M_j - S_i M_i - D_i M_i   (j = i included: -W(0) V_i M_i / 3)
+// with D_i the local correction of DipoleTree.hpp (the particle-scale noise of the operator
+// for a uniform M, interior particles only; MagnetizationParams::localCorrection)
 // and the fluid follows the Langevin law along the local field,
 //     M_i = M(|H_i|) H_i / |H_i|,   M(H) = Ms (coth xi - 1/xi),  xi = 3 chi0 H / Ms,
 // linear M = chi0 H when Ms = 0. The solver finds H (and M) satisfying both.
@@ -34,7 +36,8 @@
 //             directLimit() particles, else Tree (theta tightened, warm-started, up to twice
 //             if the sampled tree error exceeds the tolerance). Stats::solver says which.
 // A typical solve takes ~9 field evaluations cold and ~4 warm-started after a small step
-// (chi0 ~ 1.5); 11-13 for a ball at linear chi0 = 10, settled or 0.2-jittered (tests). The
+// (chi0 ~ 1.5); 11-14 for a ball at linear chi0 = 10, settled or 0.2-jittered (tests), plus
+// three for the local correction. The
 // sphere model (smoothing = 0) is indefinite on disordered sets: it stalls at its iteration
 // cap with a ~2e-2 residual at chi0 >= 3 on a jittered ball.
 //
