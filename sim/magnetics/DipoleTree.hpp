@@ -150,7 +150,7 @@ public:
     void fieldAtParticlesDirect(const std::vector<uint32_t>& targets, Eigen::VectorXd& H) const;
     /// Jacobian dH_a/dx_b [A/m^2] of the particle field at every particle, sorted order: the
     /// smoothed kernels' closed-form Jacobian (the own kernel's is zero at its centre; the
-    /// surface term is not differentiated). Sphere model: other spheres containing the
+    /// surface term and the local correction are not differentiated). Sphere model: other spheres containing the
     /// particle, and its own, add zero gradient (uniform field inside).
     void gradientAtParticles(std::vector<Mat3f>& J, bool useTree) const;
 

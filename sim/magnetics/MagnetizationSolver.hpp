@@ -118,7 +118,7 @@ public:
 
     /// J[i](a, b) = dH_a / dx_b [A/m^2] of the TOTAL field at particle i: the magnets'
     /// analytic Jacobian plus that of the particles' field with magnetization M (as solved),
-    /// from the same smoothed kernels (bounded; the surface term is not differentiated). The particle part follows the solver: Tree -> tree (opening angle of the
+    /// from the same smoothed kernels (bounded; the surface term and the local correction are not differentiated: local terms). The particle part follows the solver: Tree -> tree (opening angle of the
     /// params), Direct -> exact all pairs, External -> none (its model neglects the particle
     /// field), Auto -> what the last solve() picked (before any solve: Tree above
     /// directLimit() particles, else Direct). The Kelvin force on particle i is
