@@ -667,8 +667,9 @@ TEST_CASE("Jittered ball in a uniform field: interior field per particle, conver
         // (MagnetizationParams::localCorrection) RMS was 5.6 % at chi0 = 3 and 11.5 % at 10,
         // worst 19 % and 41 %: the random directions of each particle's near neighbours
         // seen through the smoothed near field. SPH volumes (1 / sum_j W_ij) do not remove
-        // that (5.4-6.6 % at chi0 = 3, the "[.figures]" table): the noise is in directions,
-        // not in the density.
+        // that (uncorrected: 4.8 % at chi0 = 3, 9.6 % at 10, against 5.0 % and 9.2 % with
+        // rest volumes and today's surface term; the "[.figures]" table): the noise is in
+        // directions, not in the density.
         REQUIRE(e.mean < 0.02);
         REQUIRE(e.rms < 0.03);
         REQUIRE(e.worst < 0.10);
