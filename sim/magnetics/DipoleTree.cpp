@@ -2,6 +2,8 @@
 
 #include "sim/core/Constants.hpp"
 
+#include <Eigen/Cholesky>
+
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
 #include <tbb/parallel_sort.h>
@@ -958,26 +960,39 @@ void DipoleTree::computeLocalCorrection(bool useTree) {
                 }
             }
             for (uint32_t k = target.begin; k < target.end; ++k) {
-                double avg[9] = {0, 0, 0, 0, 0, 0, 0, 0, 0}, wsum = 0, fill = 0;
+                // Smooth part of K at x_k: a weighted linear least-squares fit over the
+                // neighbours (moving least squares), its value at x_k. A plain weighted mean
+                // is biased wherever the neighbourhood is one-sided (within two supports of a
+                // surface or a floor) and N(x) varies: it would put the body's own field
+                // variation into D.
+                Eigen::Matrix4d A = Eigen::Matrix4d::Zero();
+                Eigen::Matrix<double, 4, 9> B = Eigen::Matrix<double, 4, 9>::Zero();
+                double fill = 0;
                 for (size_t q = 0; q < ranges.size(); q += 2)
                     for (uint32_t j = ranges[q]; j < ranges[q + 1]; ++j) {
-                        const double dx = px_[k] - px_[j], dy = py_[k] - py_[j], dz = pz_[k] - pz_[j];
+                        const double dx = px_[j] - px_[k], dy = py_[j] - py_[k], dz = pz_[j] - pz_[k];
                         const double r2 = dx * dx + dy * dy + dz * dz;
                         const double a2 = a2_[j], A2 = kCorrectionReach * kCorrectionReach * a2;
                         if (!(r2 < A2)) continue;
                         // fill n_k with the particle kernel (as computeSurfaceTerms)
                         if (r2 < a2) fill += 21.0 / (2.0 * kPi) * ainv_[j] * ainv_[j] * ainv_[j] * vol_[j] * wendland(r2, a2);
                         if (j == k) continue;
-                        const double w = vol_[j] * wendland(r2, A2) / (A2 * std::sqrt(A2));
-                        wsum += w;
-                        for (int e = 0; e < 9; ++e) avg[e] += w * K[9 * size_t(j) + e];
+                        const double w = vol_[j] * wendland(r2, A2);
+                        const double sA = std::sqrt(A2);
+                        const Eigen::Vector4d p(1.0, dx / sA, dy / sA, dz / sA);
+                        A.noalias() += w * p * p.transpose();
+                        for (int e = 0; e < 9; ++e) B.col(e) += (w * K[9 * size_t(j) + e]) * p;
                     }
                 // Interior ramp on the fill: 0 below 0.7, 1 above 0.8 (a flat surface's top
                 // layer has 0.5, the next ~0.85-0.9; the noise to remove is a few percent).
                 const double t = std::clamp((fill - 0.7) / 0.1, 0.0, 1.0);
                 const double wgt = t * t * (3 - 2 * t);
-                if (wsum > 0 && wgt > 0)
-                    for (int e = 0; e < 9; ++e) D[9 * k + e] = float(wgt * (K[9 * size_t(k) + e] - avg[e] / wsum));
+                if (wgt > 0 && A(0, 0) > 0) {
+                    const Eigen::LDLT<Eigen::Matrix4d> ldlt(A);
+                    const Eigen::Matrix<double, 4, 9> C = ldlt.solve(B);
+                    if (ldlt.info() == Eigen::Success && C.allFinite())
+                        for (int e = 0; e < 9; ++e) D[9 * k + e] = float(wgt * (K[9 * size_t(k) + e] - C(0, e)));
+                }
             }
         }
     });

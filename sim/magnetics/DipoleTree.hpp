@@ -58,12 +58,14 @@
 // measures it: K_k = the field at k of a uniform unit M along each axis (three field
 // evaluations of the operator itself, surface term included) is the body's demagnetization
 // tensor N(x_k), smooth on the body's scale, plus the particle-scale noise. Minus the
-// kernel-weighted mean of the neighbours' K over twice the support (k itself excluded) it
+// smooth part of K at x_k (a kernel-weighted linear least-squares fit to the neighbours' K
+// over twice the support, k itself excluded: a plain mean would be biased where the
+// neighbourhood is one-sided, near a surface or a floor, and N varies there) it
 // is the noise D_k, and the field at particle k becomes H_k - D_k M_k. Like SPH's kernel
 // gradient correction it makes the discrete operator reproduce the uniform case; it acts
 // in the interior only (weight rising from fill n_k = 0.7 to 0.8), where the surface term
-// does not. Measured: jittered ball RMS 1.3 % (chi 3) and 2.3 % (chi 10), worst 7.7 %; a
-// ball from a settled SPH tank 0.76 % (was 0.93 %) at chi 10. The operator is no longer
+// does not. Measured: jittered ball RMS 1.2 % (chi 3) and 2.2 % (chi 10), worst 7.6 %; a
+// ball from a settled SPH tank 0.86 % (was 0.93 %) at chi 10. The operator is no longer
 // exactly semidefinite, but D is a few percent: Newton-GMRES takes the same number of
 // evaluations (tests up to chi 10). Cost: three field evaluations and one neighbour pass
 // per build.

@@ -30,7 +30,7 @@ struct MagnetizationParams {
     /// each interior particle's field operator is corrected so that a uniform magnetization
     /// gives a field without particle-scale noise. Costs three field evaluations per solve.
     /// Measured on a ball jittered by 0.2 spacings at chi0 = 10: 11.5 % RMS field error per
-    /// particle without it, 2.3 % with it; on a ball cut from a settled SPH tank 0.9 -> 0.8 %.
+    /// particle without it, 2.2 % with it; on a ball cut from a settled SPH tank 0.93 -> 0.86 %.
     bool localCorrection = true;
     /// How the magnetic force enters the fluid (sim/sph/FluidMagnetics.hpp has the
     /// derivation):

@@ -662,8 +662,8 @@ TEST_CASE("Jittered ball in a uniform field: interior field per particle, conver
         REQUIRE(e.interior > 1500);
         REQUIRE(e.stats.converged);
         REQUIRE(e.stats.residual <= 1e-4);
-        // The issue's targets. Measured (direct): mean 0.3-1.5 %, RMS 0.4-2.3 %, worst
-        // 1.0-7.7 % (chi0 = 10 linear the largest). Without the local correction
+        // The issue's targets. Measured (direct): mean 0.3-1.3 %, RMS 0.4-2.2 %, worst
+        // 1.0-7.6 % (chi0 = 10 linear the largest). Without the local correction
         // (MagnetizationParams::localCorrection) RMS was 5.6 % at chi0 = 3 and 11.5 % at 10,
         // worst 19 % and 41 %: the random directions of each particle's near neighbours
         // seen through the smoothed near field. SPH volumes (1 / sum_j W_ij) do not remove
