@@ -890,7 +890,7 @@ void DipoleTree::computeSurfaceTerms() {
                 // ~1 % of the interior field at chi0 = 10 and part of the scatter. A real
                 // surface has deficits of 0.1-0.5 (0.5 in the top layer of a flat surface).
                 const double deficit = 1 - dens;
-                const double t = std::clamp((deficit - 0.05) / 0.10, 0.0, 1.0);
+                const double t = surfaceOnset_ ? std::clamp((deficit - 0.05) / 0.10, 0.0, 1.0) : (deficit > 0 ? 1.0 : 0.0);
                 if (t > 0 && g > 0) {
                     surfaceWeight_[k] = float(t * t * (3 - 2 * t) * deficit);
                     for (int a = 0; a < 3; ++a) surfaceNormal_[3 * k + a] = float(-grad[a] / g);

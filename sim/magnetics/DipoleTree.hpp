@@ -45,8 +45,9 @@
 // a few percent, and those interior particles would get a one-sided term along a random
 // normal (a bias of ~1 % of the interior field at chi = 10 on a 0.2-jittered ball).
 //
-// Local correction (computeLocalCorrection; MagnetizationParams::localCorrection, on by
-// default). The smoothed field of a uniform M is exact in the continuum, but the discrete
+// Local correction (computeLocalCorrection; MagnetizationParams::localCorrection, off by
+// default in the simulation: MagnetizationParams.hpp says why; with it on, the surface term's
+// onset above applies, off the term acts from any deficit as before). The smoothed field of a uniform M is exact in the continuum, but the discrete
 // sum at particle k sees its near neighbours' directions through the bounded near field
 // (3 Q / r^3 - 4 pi W) r^ r^: on a disordered set that is a random, traceless-dominated
 // error of a few percent of M per particle, amplified by the self-consistent solve (on a
@@ -119,6 +120,9 @@ public:
     /// C2 kernel of support smoothing * V^(1/3); 0 (or negative) makes every particle a
     /// uniformly magnetized sphere of its volume (the model before smoothed dipoles).
     void setSmoothing(double smoothing) { smoothing_ = smoothing > 0 ? smoothing : 0.0; }
+    /// Surface term onset between deficits 0.05 and 0.15 (true) or from any deficit (false,
+    /// the model before the local correction); takes effect at the next build().
+    void setSurfaceOnset(bool on) { surfaceOnset_ = on; }
     double smoothing() const { return smoothing_; }
 
     /// Sorts the particles at x [m] with volumes [m^3] (negative or non-finite volumes count
@@ -235,7 +239,8 @@ private:
     std::vector<float> px_, py_, pz_, a2_, ainv_, vol_; // a2_, ainv_: core radius^2, 1 / core radius
     std::vector<float> mx_, my_, mz_;  // moments V M (scaled volume), set by setMagnetization
     std::vector<float> surfaceWeight_, surfaceNormal_; // per particle w = max(0, 1 - n), outward normal (3)
-    std::vector<float> localCorrection_; // per particle D_k (9, row-major), see computeLocalCorrection
+    std::vector<float> localCorrection_;
+    bool surfaceOnset_ = true; // per particle D_k (9, row-major), see computeLocalCorrection
     std::vector<Node> nodes_;
     std::vector<float> cell_;            // per cell: moment, quadrupole, octupole (see .cpp)
     std::vector<uint32_t> leaves_;       // node index of each leaf, increasing begin

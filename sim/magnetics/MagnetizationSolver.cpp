@@ -251,6 +251,7 @@ MagnetizationSolver::Stats MagnetizationSolver::solve(const std::vector<Vec3>& x
 
     DipoleTree tree; // Auto builds the interaction lists only once it has picked Tree
     tree.setSmoothing(params_.smoothing);
+    tree.setSurfaceOnset(params_.localCorrection);
     tree.build(x, volume, solver == Solver::Tree ? theta : 0.0);
     const std::vector<uint32_t>& order = tree.order();
 
@@ -406,6 +407,7 @@ void MagnetizationSolver::fieldGradient(const std::vector<Vec3>& x, const std::v
     const bool useTree = kind == Solver::Tree;
     DipoleTree tree;
     tree.setSmoothing(params_.smoothing);
+    tree.setSurfaceOnset(params_.localCorrection);
     tree.build(x, volume, useTree ? (params_.openingAngle > 0 ? params_.openingAngle : 0.5) : 0.0);
     tree.setMagnetizationUnsorted(M);
     std::vector<Mat3f> Js;
@@ -420,6 +422,7 @@ void ParticleFieldEvaluator::build(const std::vector<Vec3>& x, const std::vector
                                    const std::vector<Vec3>& M, double openingAngle, double smoothing,
                                    bool localCorrection) {
     tree_.setSmoothing(smoothing);
+    tree_.setSurfaceOnset(localCorrection);
     tree_.build(x, volume, openingAngle);
     sorted_.assign(x.size(), 0);
     for (size_t k = 0; k < tree_.order().size(); ++k) sorted_[tree_.order()[k]] = uint32_t(k);

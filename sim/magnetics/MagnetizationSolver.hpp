@@ -165,7 +165,7 @@ public:
     /// inducedFieldAtParticle() only.
     void build(const std::vector<Vec3>& x, const std::vector<Real>& volume, const std::vector<Vec3>& M,
                double openingAngle = 0.5, double smoothing = DipoleTree::kDefaultSmoothing,
-               bool localCorrection = true);
+               bool localCorrection = MagnetizationParams{}.localCorrection);
     /// Field of the magnetized particles at p [m] -> [A/m].
     Vec3d inducedField(const Vec3d& p) const { return tree_.fieldAt(p); }
     /// Jacobian dH_a/dx_b [A/m^2] of the particle field at p.
