@@ -251,6 +251,7 @@ MagnetizationSolver::Stats MagnetizationSolver::solve(const std::vector<Vec3>& x
 
     DipoleTree tree; // Auto builds the interaction lists only once it has picked Tree
     tree.setSmoothing(params_.smoothing);
+    tree.setSurfaceOnset(params_.localCorrection);
     tree.build(x, volume, solver == Solver::Tree ? theta : 0.0);
     const std::vector<uint32_t>& order = tree.order();
 
@@ -306,6 +307,7 @@ MagnetizationSolver::Stats MagnetizationSolver::solve(const std::vector<Vec3>& x
         const bool useTree = solver == Solver::Tree;
         stats.solver = solver;
         for (int attempt = 0;; ++attempt) {
+            if (params_.localCorrection && !tree.hasLocalCorrection()) tree.computeLocalCorrection(useTree);
             solveSelfConsistent(tree, useTree, Hext, Hs, stats);
             stats.fieldError = stats.residual;
             if (!useTree) break;
@@ -405,6 +407,7 @@ void MagnetizationSolver::fieldGradient(const std::vector<Vec3>& x, const std::v
     const bool useTree = kind == Solver::Tree;
     DipoleTree tree;
     tree.setSmoothing(params_.smoothing);
+    tree.setSurfaceOnset(params_.localCorrection);
     tree.build(x, volume, useTree ? (params_.openingAngle > 0 ? params_.openingAngle : 0.5) : 0.0);
     tree.setMagnetizationUnsorted(M);
     std::vector<Mat3f> Js;
@@ -416,12 +419,23 @@ void MagnetizationSolver::fieldGradient(const std::vector<Vec3>& x, const std::v
 // Evaluator
 
 void ParticleFieldEvaluator::build(const std::vector<Vec3>& x, const std::vector<Real>& volume,
-                                   const std::vector<Vec3>& M, double openingAngle, double smoothing) {
+                                   const std::vector<Vec3>& M, double openingAngle, double smoothing,
+                                   bool localCorrection) {
     tree_.setSmoothing(smoothing);
+    tree_.setSurfaceOnset(localCorrection);
     tree_.build(x, volume, openingAngle);
     sorted_.assign(x.size(), 0);
     for (size_t k = 0; k < tree_.order().size(); ++k) sorted_[tree_.order()[k]] = uint32_t(k);
     tree_.setMagnetizationUnsorted(M);
+    correct_ = localCorrection;
+    corrected_ = std::make_unique<std::once_flag>();
+}
+
+Vec3d ParticleFieldEvaluator::inducedFieldAtParticle(size_t i) const {
+    // The correction costs three field evaluations: only when a particle-centre field is
+    // asked for (point evaluations do not use it).
+    if (correct_ && corrected_) std::call_once(*corrected_, [this] { tree_.computeLocalCorrection(tree_.openingAngle() > 0); });
+    return tree_.fieldAtParticleDirect(sorted_[i]);
 }
 
 Vec3d totalField(const std::vector<Magnet>& magnets, const ParticleFieldEvaluator& particles, const Vec3d& p) {

@@ -7,7 +7,9 @@
 // uniformly magnetized sphere of volume V_i, the older model). sim/magnetics/DipoleTree.hpp
 // has the closed-form field, why it gives the macroscopic field on disordered particle sets
 // and the surface term S_i. The field at particle i is
-//     H_i = H_ext(x_i) + sum_j G(x_i - x_j) V_j M_j - S_i M_i   (j = i included: -W(0) V_i M_i / 3)
+//     H_i = H_ext(x_i) + sum_j G(x_i - x_j) V_j M_j - S_i M_i - D_i M_i   (j = i included: -W(0) V_i M_i / 3)
+// with D_i the local correction of DipoleTree.hpp (the particle-scale noise of the operator
+// for a uniform M, interior particles only; MagnetizationParams::localCorrection)
 // and the fluid follows the Langevin law along the local field,
 //     M_i = M(|H_i|) H_i / |H_i|,   M(H) = Ms (coth xi - 1/xi),  xi = 3 chi0 H / Ms,
 // linear M = chi0 H when Ms = 0. The solver finds H (and M) satisfying both.
@@ -34,7 +36,8 @@
 //             directLimit() particles, else Tree (theta tightened, warm-started, up to twice
 //             if the sampled tree error exceeds the tolerance). Stats::solver says which.
 // A typical solve takes ~9 field evaluations cold and ~4 warm-started after a small step
-// (chi0 ~ 1.5); 11-13 for a ball at linear chi0 = 10, settled or 0.2-jittered (tests). The
+// (chi0 ~ 1.5); 11-14 for a ball at linear chi0 = 10, settled or 0.2-jittered (tests), plus
+// three for the local correction. The
 // sphere model (smoothing = 0) is indefinite on disordered sets: it stalls at its iteration
 // cap with a ~2e-2 residual at chi0 >= 3 on a jittered ball.
 //
@@ -46,6 +49,8 @@
 
 #include <Eigen/Core>
 
+#include <memory>
+#include <mutex>
 #include <optional>
 #include <vector>
 
@@ -113,7 +118,7 @@ public:
 
     /// J[i](a, b) = dH_a / dx_b [A/m^2] of the TOTAL field at particle i: the magnets'
     /// analytic Jacobian plus that of the particles' field with magnetization M (as solved),
-    /// from the same smoothed kernels (bounded; the surface term is not differentiated). The particle part follows the solver: Tree -> tree (opening angle of the
+    /// from the same smoothed kernels (bounded; the surface term and the local correction are not differentiated: local terms). The particle part follows the solver: Tree -> tree (opening angle of the
     /// params), Direct -> exact all pairs, External -> none (its model neglects the particle
     /// field), Auto -> what the last solve() picked (before any solve: Tree above
     /// directLimit() particles, else Direct). The Kelvin force on particle i is
@@ -156,8 +161,11 @@ class ParticleFieldEvaluator {
 public:
     /// Builds the tree. openingAngle 0 = exact sums (O(N) per point), default 0.5.
     /// smoothing: the particle model, as MagnetizationParams::smoothing (pass the solver's).
+    /// localCorrection: as MagnetizationParams::localCorrection (pass the solver's), used by
+    /// inducedFieldAtParticle() only.
     void build(const std::vector<Vec3>& x, const std::vector<Real>& volume, const std::vector<Vec3>& M,
-               double openingAngle = 0.5, double smoothing = DipoleTree::kDefaultSmoothing);
+               double openingAngle = 0.5, double smoothing = DipoleTree::kDefaultSmoothing,
+               bool localCorrection = MagnetizationParams{}.localCorrection);
     /// Field of the magnetized particles at p [m] -> [A/m].
     Vec3d inducedField(const Vec3d& p) const { return tree_.fieldAt(p); }
     /// Jacobian dH_a/dx_b [A/m^2] of the particle field at p.
@@ -165,16 +173,19 @@ public:
     /// Exact all-particle sum at p (reference, O(N)).
     Vec3d inducedFieldExact(const Vec3d& p) const { return tree_.fieldAtDirect(p); }
     /// The particle field the solver uses at particle i (index into build()'s x): exact sum,
-    /// O(N), including the surface sampling term.
-    Vec3d inducedFieldAtParticle(size_t i) const { return tree_.fieldAtParticleDirect(sorted_[i]); }
+    /// O(N), including the surface sampling term and the local correction (computed at the
+    /// first call: three field evaluations).
+    Vec3d inducedFieldAtParticle(size_t i) const;
     size_t size() const { return tree_.size(); }
     /// Total moment sum V M [A m^2] and volume centroid [m]: the far field is that dipole.
     Vec3d totalMoment() const { return tree_.totalMoment(); }
     Vec3d centroid() const { return tree_.centroid(); }
 
 private:
-    DipoleTree tree_;
+    mutable DipoleTree tree_;      // mutable: the local correction is computed on first use
     std::vector<uint32_t> sorted_; // sorted_[i] = tree place of input particle i
+    bool correct_ = true;
+    mutable std::unique_ptr<std::once_flag> corrected_;
 };
 
 /// H [A/m] at p: magnets plus magnetized particles.

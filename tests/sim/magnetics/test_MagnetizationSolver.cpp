@@ -655,52 +655,88 @@ TEST_CASE("Jittered ball in a uniform field: interior field per particle, conver
     jitteredBall(s, 10 * s, 0.2, 7, x, V);
     REQUIRE(x.size() == 4169);
     for (const BallCase& c : kBallCases) {
-        const BallErrors e = ballErrors(x, V, params(Solver::Direct, c.chi0, c.Ms, 1e-3), kBallH0, interiorMargin(s));
+        MagnetizationParams p = params(Solver::Direct, c.chi0, c.Ms, 1e-3);
+        p.localCorrection = true;
+        const BallErrors e = ballErrors(x, V, p, kBallH0, interiorMargin(s));
         INFO("chi0 " << c.chi0 << " Ms " << c.Ms << ": interior " << e.interior << ", mean " << e.mean << ", rms "
                      << e.rms << ", worst " << e.worst << ", " << e.stats.iterations << " evaluations, residual "
                      << e.stats.residual);
         REQUIRE(e.interior > 1500);
         REQUIRE(e.stats.converged);
         REQUIRE(e.stats.residual <= 1e-4);
-        // The targets (mean 2 %, RMS 3 %, worst 10 %) hold up to chi0 = 1. Beyond, the random
-        // anisotropy of each particle's neighbourhood (this set's SPH density scatters by
-        // several percent, a settled state's by ~0.1 %) is amplified by about chi / 3: for
-        // linear chi0 = 3 and 10 and the saturating cases these are the measured errors
-        // (+~25 %), NOT the targets; they fail on the sphere model by far (no convergence
-        // at chi0 >= 3, 17 % RMS already at chi0 = 1).
-        struct Bound {
-            double mean, rms, worst;
-        };
-        const Bound target{0.02, 0.03, 0.10};
-        const Bound b = c.Ms > 0 ? (c.chi0 < 5 ? Bound{0.02, 0.04, 0.12} : Bound{0.02, 0.05, 0.15})
-                      : c.chi0 <= 1 ? target
-                      : c.chi0 < 5  ? Bound{0.02, 0.07, 0.25}
-                                    : Bound{0.03, 0.14, 0.50};
-        REQUIRE(e.mean < b.mean);
-        REQUIRE(e.rms < b.rms);
-        REQUIRE(e.worst < b.worst);
+        // The issue's targets, with the local correction (off by default in the
+        // simulation: MagnetizationParams.hpp). Measured (direct): mean 0.3-1.3 %, RMS 0.4-2.2 %, worst
+        // 1.0-7.6 % (chi0 = 10 linear the largest). Without the local correction
+        // (MagnetizationParams::localCorrection) RMS was 5.6 % at chi0 = 3 and 11.5 % at 10,
+        // worst 19 % and 41 %: the random directions of each particle's near neighbours
+        // seen through the smoothed near field. SPH volumes (1 / sum_j W_ij) do not remove
+        // that (uncorrected: 4.8 % at chi0 = 3, 9.6 % at 10, against 5.0 % and 9.2 % with
+        // rest volumes and today's surface term; the "[.figures]" table): the noise is in
+        // directions, not in the density.
+        REQUIRE(e.mean < 0.02);
+        REQUIRE(e.rms < 0.03);
+        REQUIRE(e.worst < 0.10);
     }
+    // Tree (chi0 = 10, the hardest case): the correction measured with the tree's own sums.
+    MagnetizationParams pt = params(Solver::Tree, 10, 0, 1e-3);
+    pt.localCorrection = true;
+    const BallErrors t = ballErrors(x, V, pt, kBallH0, interiorMargin(s));
+    INFO("tree: mean " << t.mean << ", rms " << t.rms << ", worst " << t.worst << ", residual " << t.stats.residual);
+    REQUIRE(t.stats.solver == Solver::Tree);
+    REQUIRE(t.stats.converged);
+    REQUIRE(t.mean < 0.02);
+    REQUIRE(t.rms < 0.03);
+    REQUIRE(t.worst < 0.10);
 }
 
-TEST_CASE("Disordered balls: figures of both particle models", "[.figures]") {
+namespace {
+// SPH volumes V_i = 1 / sum_j W(x_i - x_j) with the simulation's kernel (cubic spline of
+// support 2 spacings), scaled so that a full cubic lattice has V = s^3 (as FluidSimulation
+// sets its particle volume): what a simulation passing m / rho_i would pass.
+std::vector<Real> sphVolumes(const std::vector<Vec3>& x, double s) {
+    auto W = [h = 2 * s](double r) {
+        const double q = r / h;
+        if (q >= 1) return 0.0;
+        return 8.0 / (kPi * h * h * h) * (q <= 0.5 ? 6 * q * q * (q - 1) + 1 : 2 * (1 - q) * (1 - q) * (1 - q));
+    };
+    double lattice = 0;
+    for (int k = -2; k <= 2; ++k)
+        for (int j = -2; j <= 2; ++j)
+            for (int i = -2; i <= 2; ++i) lattice += W(s * std::sqrt(double(i * i + j * j + k * k)));
+    std::vector<Real> V(x.size());
+    for (size_t i = 0; i < x.size(); ++i) {
+        double sum = 0;
+        for (const Vec3& y : x) sum += W((x[i] - y).cast<double>().norm());
+        V[i] = Real(s * s * s * lattice / sum);
+    }
+    return V;
+}
+} // namespace
+
+TEST_CASE("Disordered balls: figures of the particle models", "[.figures]") {
     // Not run by default (build/bin/ferro_magnetics_tests "[.figures]"): the table of the
-    // closing report, smoothed dipoles against the old sphere model, direct solver.
+    // closing report, direct solver. Models: smoothed dipoles with the local correction (the
+    // default), without it, without it on SPH volumes, and the old sphere model.
     std::vector<Vec3> xs, xj;
     std::vector<Real> Vs, Vj;
     double s = 0;
     settledBall(xs, Vs, s);
     jitteredBall(1e-3, 10e-3, 0.2, 7, xj, Vj);
+    const std::vector<Real> Vsph[2] = {sphVolumes(xs, s), sphVolumes(xj, 1e-3)};
     for (int set = 0; set < 2; ++set)
-        for (double smoothing : {MagnetizationParams{}.smoothing, 0.0})
+        for (int model = 0; model < 4; ++model)
             for (const BallCase& c : kBallCases) {
                 MagnetizationParams p = params(Solver::Direct, c.chi0, c.Ms, 1e-3);
-                p.smoothing = smoothing;
+                p.localCorrection = model == 0;
+                if (model == 3) p.smoothing = 0;
                 const double spacing = set == 0 ? s : 1e-3;
-                const BallErrors e = ballErrors(set == 0 ? xs : xj, set == 0 ? Vs : Vj, p, kBallH0, interiorMargin(spacing));
+                const std::vector<Real>& V = model == 2 ? Vsph[set] : set == 0 ? Vs : Vj;
+                const BallErrors e = ballErrors(set == 0 ? xs : xj, V, p, kBallH0, interiorMargin(spacing));
+                const char* names[] = {"corrected", "smoothed", "sph-vol", "spheres"};
                 std::printf("%-8s %-9s chi0 %4.1f Ms %5.0f  interior %4zu  mean %6.2f%%  rms %7.2f%%  worst %8.2f%%  "
                             "evals %3d  residual %.1e  converged %s\n",
-                            set == 0 ? "settled" : "jittered", smoothing > 0 ? "smoothed" : "spheres", c.chi0, c.Ms,
-                            e.interior, 100 * e.mean, 100 * e.rms, 100 * e.worst, e.stats.iterations, e.stats.residual,
+                            set == 0 ? "settled" : "jittered", names[model], c.chi0, c.Ms, e.interior, 100 * e.mean,
+                            100 * e.rms, 100 * e.worst, e.stats.iterations, e.stats.residual,
                             e.stats.converged ? "yes" : "NO");
                 std::fflush(stdout);
             }
