@@ -139,7 +139,7 @@ paper's dish (5 cm across, 1 cm of oil-based ferrofluid, chi0 1.5, Ms 35 kA/m) o
 dipole held still 2 cm under the floor from t = 0. Magnetization \`external\` (M from the
 magnet's field alone): its force is conservative, so the pool comes to rest and the settled
 heap is a well-defined target; with the particles' own field in M (\`auto\`, \`tree\`,
-\`direct\`) the pool keeps moving at a few mm/s (issue 13; see the magnetics section). Every run
+\`direct\`) the pool kept moving at a few mm/s before 36d4240 (issue 13; see the magnetics section). Every run
 starts from the flat fill and is simulated for ${settle} s of simulated time (no pre-roll: a fixed
 settle time gives every setting the same work); the heap forms within 0.5 s, and over the
 last 0.5 s the base run's profile changes by ${settle_um} um RMS, under the errors below.
