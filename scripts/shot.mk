@@ -5,6 +5,11 @@
 #   particles/particles_NNNN.ply -> surface/surface_NNNN.ply -> spiky/spiky_NNNN.ply
 #     -> shot/mesh_NNNN.inc (+ magnets_NNNN.inc) -> png/frame_NNNN.png -> shot.mp4, shot.gif
 #
+# A re-simulation rewrites every frame, but a frame whose new particle file has the same bytes
+# as the previous run's keeps the previous file's time (see particles/.complete), so its
+# meshes and render are not redone: extending [shot] duration, or a magnet edit that takes
+# effect from frame N on, re-meshes only the frames whose particles changed.
+#
 # Every stage also depends on a stamp of the scene sections it reads, .scene/<stage>.toml,
 # rewritten (at every make run) only when that section's text changes: editing [render]
 # re-renders every frame but re-meshes none, editing [surface] re-meshes, editing [sim] or the
@@ -27,6 +32,8 @@
 #   make clean-renders           delete the PNGs (keeps particles and meshes)
 
 SHELL := /bin/bash
+# This file's directory (scripts/): its helper frame-unchanged.sh lives beside it.
+SHOT_SCRIPTS := $(patsubst %/,%,$(dir $(lastword $(MAKEFILE_LIST))))
 .DELETE_ON_ERROR:
 .SUFFIXES:
 # Intermediate files (meshes between stages) are kept: they are the point of the pipeline.
@@ -79,20 +86,30 @@ prepare: particles/.complete shot/shot.pov shot/look.inc
 # The settled pre-roll ([shot] preroll) is cached beside it in preroll.ply: ferro-sim reuses
 # it while the sections it depends on are unchanged (an edit of later magnet keys re-runs the
 # shot but not the pre-roll).
+# Frames where nothing moved: before the swap, every new frame file that holds the same frame
+# as the previous run's file of that number (scripts/frame-unchanged.sh: every particle value
+# and every header line bit for bit, except the lines naming the run's scene and its hash;
+# exact, no tolerance) is given the previous file's time (touch -r), so make sees it as old and
+# keeps its meshes and render; a frame where anything changed keeps the time ferro-sim wrote
+# it, newer than every mesh made before, and is re-meshed. The line `shot.mk: frames
+# unchanged: K of N` says how many frames kept their meshes.
 particles/.complete: .scene/sim.toml
 	rm -rf particles.new
 	$(FERRO_BIN)/ferro-sim '$(SCENE)' --out particles.new --preroll-cache preroll.ply --quiet $(if $(MAX_FRAMES),--max-frames $(MAX_FRAMES)) $(SETS)
+	@same=0 all=0; for f in particles.new/particles_*.ply; do [ -e "$$f" ] || continue; all=$$((all + 1)); \
+	  old=particles/$${f##*/}; if '$(SHOT_SCRIPTS)/frame-unchanged.sh' "$$old" "$$f"; then touch -r "$$old" "$$f"; same=$$((same + 1)); fi; \
+	done; echo "shot.mk: frames unchanged: $$same of $$all (the same as the previous run's: not re-meshed)"
 	touch particles.new/.complete
 	rm -rf particles.old
 	if [ -d particles ]; then mv particles particles.old; fi
 	mv particles.new particles
 	rm -rf particles.old
 
-# A particle file is made by the simulation; after a new run it is touched so the later stages
-# see it as new. A frame the simulation never reached is an error, not an empty frame.
-particles/particles_%.ply: particles/.complete
+# A particle file is made by the simulation (an order-only prerequisite: the file's own time,
+# set above, says whether it changed). A frame the simulation never reached is an error, not
+# an empty frame.
+particles/particles_%.ply: | particles/.complete
 	@test -f $@ || { echo "shot.mk: $@ is missing: the simulation stopped before frame $*" >&2; exit 1; }
-	@touch $@
 
 # ---- Per frame ----------------------------------------------------------------------------------
 surface/surface_%.ply: particles/particles_%.ply .scene/surface.toml

@@ -10,9 +10,8 @@
 #   2. Fluid far below the critical magnetization, no spike work and no remeshing: ferro-spikes
 #      on frame 0 of paper_fig9_approach.toml (magnet 8 cm below) against the settled frame of
 #      surface.sh (magnet 2 cm below, supercritical); input and output meshes compared.
-#   3. Frames where nothing moved, no re-meshing: a shot directory (scripts/shot.mk) whose
-#      particle frames 0..2 are one settled frame three times; which surfaces make builds, and
-#      what a second make run rebuilds.
+#   3. Frames where nothing moved, no re-meshing: scripts/bench/still-frames.sh (its own area,
+#      assembled right after this section).
 #   4. `auto` says what it chose: ferro-sim's progress lines for magnetization.solver = "auto"
 #      and fluid.viscosity_method = "auto".
 # Writes scene_cost.csv (one row per case) and scene-cost.md.
@@ -79,32 +78,6 @@ for case in subcritical supercritical disabled; do
   echo "spikes,$case ($tri_in -> $tri_out triangles; max move $dmax m),$seconds,$tri_out,,$holds,ferro-spikes on one frame ($count particles)" >> "$csv"
 done
 
-# ---- 3. still frames and make -----------------------------------------------------------------
-shot="$work/shot"
-mkdir -p "$shot/particles"
-for n in 0000 0001 0002; do cp "$settled" "$shot/particles/particles_$n.ply"; done
-cat > "$shot/Makefile" <<MAKEFILE
-SCENE := $root/examples/magnet_slide.toml
-FERRO_BIN := $bin
-SHOT_FIRST := 0
-SHOT_LAST := 2
-SPIKES := 1
-include $root/scripts/shot.mk
-MAKEFILE
-# The stamps are written when make reads shot.mk; the simulation is then marked done after them.
-make -C "$shot" -q particles/.complete > /dev/null 2>&1 || true
-touch "$shot/particles/.complete"; sleep 1; touch "$shot"/particles/particles_*.ply
-targets=(spiky/spiky_0000.ply spiky/spiky_0001.ply spiky/spiky_0002.ply)
-bench_time seconds make -C "$shot" --no-print-directory "${targets[@]}"
-first_runs="$(grep -c 'ferro-surface' "$work/last.log" || true)"
-first_cpu="$seconds"
-bench_time seconds make -C "$shot" --no-print-directory "${targets[@]}"
-second_runs="$(grep -c 'ferro-surface' "$work/last.log" || true)"
-if [[ $first_runs == 1 ]]; then still=yes; else still=no; fi
-echo "still frames,3 identical frames: surfaces meshed on the first make,$first_cpu,$first_runs,,$still,shot.mk surface+spikes of frames 0-2" >> "$csv"
-if [[ $second_runs == 0 ]]; then again=yes; else again=no; fi
-echo "still frames,second make with nothing changed: surfaces meshed,$seconds,$second_runs,,$again,shot.mk surface+spikes of frames 0-2" >> "$csv"
-
 # ---- 4. auto ------------------------------------------------------------------------------------
 mag_frame="$(grep -m1 'M solves' "$work/sim_magnet_magnetic.log" || true)"
 chosen="$(sed -n 's/.*M solves [0-9]*\/[0-9]* (\([a-z]*\),.*/\1/p' <<< "$mag_frame")"
@@ -133,11 +106,7 @@ r3() { printf '%.3g' "$1"; }
   echo "  $(r3 "${sim_ms[magnet_magnetic]}") ms per step ($(r3 "$(calc "${sim_ms[magnet_magnetic]} / ${sim_ms[no_magnets]}")")x; the particles' field re-solved every 10th step)."
   echo "- Subcritical fluid: ferro-spikes takes ${spike_cpu[subcritical]} CPU s and returns the surface unchanged"
   echo "  (\`${spike_line[subcritical]}\`); a supercritical frame ${spike_cpu[supercritical]} CPU s; spikes disabled (a copy) ${spike_cpu[disabled]} CPU s."
-  echo "- Still frames: $first_runs of 3 identical frames were meshed (surface and spikes: $first_cpu CPU s for"
-  echo "  the three); a second make rebuilt $second_runs. $([[ $still == no ]] && echo "Frames where nothing moved are NOT skipped: make
-  works from file times, and every frame the simulation writes is a new file to it. Open: it needs a
-  'nothing moved' test (particles and magnets of frame N against N-1 within a tolerance) that reuses
-  frame N-1's meshes; not done here.")"
+  echo "- Frames where nothing moved: the next subsection (\`scripts/bench/still-frames.sh\`)."
   echo "- \`auto\`: magnetization.solver prints its choice on every frame line ($(sed 's/.*M solves/M solves/; s/ ETA.*//' <<< "$mag_frame"));"
   echo "  fluid.viscosity_method $([[ $visc_auto == yes ]] && echo "names the method in the header line" || echo "says only when it chose implicit (the header line names nothing when it chose explicit)")."
 } > "$out/scene-cost.md"

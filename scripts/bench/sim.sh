@@ -6,6 +6,11 @@
 #
 #   scripts/bench/sim.sh [OUT_DIR]        (default tests/bench/report; BENCH_QUICK=1: tiny)
 #
+# Particle ladder: 640 / 2,560 / 10,240 particles in the half dish (the spacings of 2.5k / 10k /
+# 41k in the full dish); BENCH_SIM_164K=1 adds 40,960 (164k in the full dish, 0.77 mm), which
+# then becomes the ladder's reference. That one run is about 30 CPU minutes on an idle core,
+# more than the rest of this script together, so it is not in the default ladder.
+#
 # Every run simulates SETTLE seconds from the flat fill (1.5 s; the heap forms and settles);
 # its last frame is measured with bench-heap-profile against a reference run of the same
 # scene: the finest particle count for the count ladder (particles.csv), the tightest DFSPH
@@ -33,6 +38,7 @@ if [[ "${BENCH_QUICK:-0}" == 1 ]]; then
     settle=0.5 counts=(320 640) base=320
 else
     settle=1.5 counts=(640 2560 10240) base=2560
+    [[ "${BENCH_SIM_164K:-0}" == 1 ]] && counts+=(40960)
 fi
 fine=${counts[-1]}
 echo "sim.sh: heap pool, settle ${settle} s, particles ${counts[*]}, base $base, $bench_jobs runs at a time"
@@ -108,7 +114,17 @@ done
 # the reading of them written down (see the "why" column), checked when the report is redone.
 P="$out/particles.csv" S="$out/pressure_solver.csv" D="$out/density_tolerance.csv" T="$out/max_dt.csv"
 g() { csv_get "$@"; }
-lo=${counts[0]} mid=${counts[1]}
+lo=${counts[0]} mid=${counts[1]} hi=${counts[-2]}
+# join_rows COLUMN SEP: the column's value for every rung of the ladder, joined by SEP.
+join_rows() { local n; for n in "${counts[@]}"; do g "$P" "$n" "$1"; done | awk -v sep="$2" '{ printf "%s%s", (NR > 1 ? sep : ""), $0 }'; }
+# The coarser rungs' heap errors: "E mm RMS at S mm spacing (N particles; rise R %)", joined.
+rung_errors() {
+    local n
+    for n in "${counts[@]}"; do
+        ((n == fine)) && continue
+        echo "$(g "$P" "$n" heap_rms_err_mm) mm RMS at $(g "$P" "$n" spacing_mm) mm ($n particles; rise error $(g "$P" "$n" rise_err_pct) %)"
+    done | awk '{ printf "%s%s", (NR > 1 ? ", " : ""), $0 }'
+}
 frames=("$cache/sim/p$base/frames"/particles_*.ply)
 settle_um="$("$bench_bin/bench-heap-profile" "${frames[-2]}" --ref "${frames[-1]}" --summary |
     tr ' ' '\n' | sed -n 's/^profile_rms_err_m=//p' | awk '{ printf "%.1f", 1e6 * $1 }')"
@@ -123,7 +139,7 @@ paper's dish (5 cm across, 1 cm of oil-based ferrofluid, chi0 1.5, Ms 35 kA/m) o
 dipole held still 2 cm under the floor from t = 0. Magnetization \`external\` (M from the
 magnet's field alone): its force is conservative, so the pool comes to rest and the settled
 heap is a well-defined target; with the particles' own field in M (\`auto\`, \`tree\`,
-\`direct\`) the pool keeps moving at a few mm/s (issue 13; see the magnetics section). Every run
+\`direct\`) the pool kept moving at a few mm/s before 36d4240 (issue 13; see the magnetics section). Every run
 starts from the flat fill and is simulated for ${settle} s of simulated time (no pre-roll: a fixed
 settle time gives every setting the same work); the heap forms within 0.5 s, and over the
 last 0.5 s the base run's profile changes by ${settle_um} um RMS, under the errors below.
@@ -143,11 +159,11 @@ last 0.5 s the base run's profile changes by ${settle_um} um RMS, under the erro
   time (kept in the CSVs) measures the neighbours; CPU time does not. Ratios between rows are
   what to read; with 2 threads on an idle machine a run takes less wall time than its CPU time.
 - **Particle counts**: ${counts[*]} in the half dish are spacings of
-  $(g "$P" "$lo" spacing_mm) / $(g "$P" "$mid" spacing_mm) / $(g "$P" "$fine" spacing_mm) mm, the spacings of
-  2.5k / 10k / 41k particles in the full dish of examples/dish.toml. The issue's 164k
-  (0.76 mm, $((4 * fine)) particles in this dish) was not run: growing as from $mid to $fine,
-  it would cost about $(awk -v a="$(g "$P" "$fine" cpu_s_per_sim_s)" -v b="$(g "$P" "$mid" cpu_s_per_sim_s)" -v T="$settle" 'BEGIN { printf "%.0f CPU s per simulated second, %.0f CPU minutes", a * a / b, a * a / b * T / 60 }')
-  for one run (an estimate, not a measurement), beyond this script's budget on this machine.
+  $(join_rows spacing_mm " / ") mm, the spacings of $(for n in "${counts[@]}"; do awk -v n="$n" 'BEGIN { x = 4 * n / 1000; printf (x < 10 ? "%.1fk\n" : "%.0fk\n"), x }'; done | paste -sd/ | sed 's|/| / |g')
+  particles in the full dish of examples/dish.toml. The finest, ${fine} particles, is the
+  reference of the ladder: its own error is zero by definition, and the others' errors are
+  against it, not against the exact solution. $(if ((fine < 40960)); then echo "The issue's 164k rung (0.77 mm, 40960
+  particles here) is not in this run: \`BENCH_SIM_164K=1\` adds it (about 30 CPU minutes for one run)."; fi)
 - **Cost noise**: the ${counts[0]}-particle run three times took $(cat "$cache"/sim/p${counts[0]}{,_rep1,_rep2}/cost | awk '{ c[NR] = $2; if (NR == 1 || $2 < lo) lo = $2; if ($2 > hi) hi = $2 } END { printf "%.2f / %.2f / %.2f CPU s (spread %.0f %% of the least)", c[1], c[2], c[3], 100 * (hi - lo) / lo }'): cost
   differences of that order between rows are noise.
 - **Budget**: the runs of this section take $(cat "$cache"/sim/{p*,refB,wcsph,tol*,dt*,cfl*}/cost 2>/dev/null | awk '{ c += $2; if ($2 > m) m = $2 } END { w = c / 2 > m ? c / 2 : m; printf "%.0f CPU s in all, the longest run %.0f: two runs at a time on an idle 2-core machine, about %.0f min", c, m, w / 60 }')
@@ -168,20 +184,20 @@ $(csv_md "$T" setting steps cpu_s_per_sim_s cpu_ms_per_step heap_rms_err_mm heap
 ### Findings
 
 - **Resolution is the error that matters; the solver knobs are not.** The heap itself (the
-  displacement h(r) - h_initial(r)) is off the $(g "$P" "$fine" spacing_mm) mm run by $(g "$P" "$lo" heap_rms_err_mm) mm RMS at
-  $(g "$P" "$lo" spacing_mm) mm spacing ($lo particles; rise error $(g "$P" "$lo" rise_err_pct) %) and by $(g "$P" "$mid" heap_rms_err_mm) mm at
-  $(g "$P" "$mid" spacing_mm) mm ($mid; rise $(g "$P" "$mid" rise_err_pct) %); every DFSPH tolerance and step-bound setting at
+  displacement h(r) - h_initial(r)) is off the $(g "$P" "$fine" spacing_mm) mm run by $(rung_errors);
+  every DFSPH tolerance and step-bound setting at
   ${base} particles stays within
   $(awk -F, 'FNR > 1 && $8 + 0 > m { m = $8 + 0 } END { printf "%.3f", m }' "$D" "$T") mm RMS of its reference
   (the reference rise is $(g "$S" "dfsph 5e-5 max_dt 5e-4 (ref)" rise_mm) mm; WCSPH: $(g "$S" wcsph heap_rms_err_mm) mm).
-  The absolute surface height differs more ($(g "$P" "$lo" profile_rms_err_mm) / $(g "$P" "$mid" profile_rms_err_mm) mm RMS): a coarser fill of the
+  The absolute surface height differs more ($(join_rows profile_rms_err_mm " / ") mm RMS): a coarser fill of the
   same block holds less fluid (column height over the centre before anything moves:
-  $(g "$P" "$lo" initial_centre_height_mm) / $(g "$P" "$mid" initial_centre_height_mm) / $(g "$P" "$fine" initial_centre_height_mm) mm for the 10 mm block), so a coarse preview
+  $(join_rows initial_centre_height_mm " / ") mm for the 10 mm block), so a coarse preview
   also shows a shallower pool.
-- **Cost per particle count**: $(g "$P" "$lo" cpu_s_per_sim_s) / $(g "$P" "$mid" cpu_s_per_sim_s) / $(g "$P" "$fine" cpu_s_per_sim_s) CPU s per
-  simulated second for $lo / $mid / $fine particles: $(ratio "$(g "$P" "$fine" cpu_s_per_sim_s)" "$(g "$P" "$mid" cpu_s_per_sim_s)")x for 4x the
-  particles from $mid to $fine, of which $(ratio "$(g "$P" "$fine" steps)" "$(g "$P" "$mid" steps)")x more steps and $(ratio "$(g "$P" "$fine" cpu_ms_per_step)" "$(g "$P" "$mid" cpu_ms_per_step)")x the CPU per
-  step (4x the particles, and the pressure solve iterates more at the finer spacing).
+- **Cost per particle count**: $(join_rows cpu_s_per_sim_s " / ") CPU s per
+  simulated second for $(echo "${counts[*]}" | sed 's| | / |g') particles: $(ratio "$(g "$P" "$fine" cpu_s_per_sim_s)" "$(g "$P" "$hi" cpu_s_per_sim_s)")x for 4x the
+  particles from $hi to $fine, of which $(ratio "$(g "$P" "$fine" steps)" "$(g "$P" "$hi" steps)")x more steps and $(ratio "$(g "$P" "$fine" cpu_ms_per_step)" "$(g "$P" "$hi" cpu_ms_per_step)")x the CPU per
+  step (4x the particles, and the pressure solve iterates more at the finer spacing). One
+  ${fine}-particle run of ${settle} s took $(awk -v c="$(g "$P" "$fine" cpu_s_per_sim_s)" -v T="$settle" 'BEGIN { printf "%.0f", c * T / 60 }') CPU minutes.
 - **Pressure solver**: WCSPH takes $(g "$S" wcsph steps) steps against DFSPH's $(g "$S" dfsph steps)
   and costs $(g "$S" wcsph cpu_s_per_sim_s) against $(g "$S" dfsph cpu_s_per_sim_s) CPU s per simulated second,
   with a heap error of $(g "$S" wcsph heap_rms_err_mm) mm RMS against DFSPH's $(g "$S" dfsph heap_rms_err_mm) mm.
@@ -201,7 +217,11 @@ For \`scripts/presets.conf\`. The particle count is a property of the scene (its
 
 | key | preview | final | large | why (numbers above) |
 |---|---|---|---|---|
-| particle spacing (\`fluid.spacing\` or the blocks' \`count\`) | 1.9 mm (10k in the paper's dish) | 1.2 mm (41k, the paper's) | 1.2 mm | 1.9 mm: heap $(g "$P" "$mid" heap_rms_err_mm) mm RMS off the 1.2 mm run (rise $(g "$P" "$mid" rise_err_pct) %) for 1/$(ratio "$(g "$P" "$fine" cpu_s_per_sim_s)" "$(g "$P" "$mid" cpu_s_per_sim_s)") of the cost; 3 mm: $(g "$P" "$lo" heap_rms_err_mm) mm (rise $(g "$P" "$lo" rise_err_pct) %) and a pool $(awk -v a="$(g "$P" "$fine" initial_centre_height_mm)" -v b="$(g "$P" "$lo" initial_centre_height_mm)" 'BEGIN { printf "%.1f", a - b }') mm shallower (its fill holds less fluid): too coarse for a 1 cm layer |
+$(if ((fine >= 40960)); then
+    echo "| particle spacing (\`fluid.spacing\` or the blocks' \`count\`) | 1.9 mm (10k in the paper's dish) | 1.2 mm (41k, the paper's) | 1.2 mm | against the $(g "$P" "$fine" spacing_mm) mm run (164k in the paper's dish): 1.2 mm is $(g "$P" "$hi" heap_rms_err_mm) mm RMS off (rise $(g "$P" "$hi" rise_err_pct) %) for 1/$(ratio "$(g "$P" "$fine" cpu_s_per_sim_s)" "$(g "$P" "$hi" cpu_s_per_sim_s)") of its cost; 1.9 mm $(g "$P" "$mid" heap_rms_err_mm) mm (rise $(g "$P" "$mid" rise_err_pct) %) for 1/$(ratio "$(g "$P" "$fine" cpu_s_per_sim_s)" "$(g "$P" "$mid" cpu_s_per_sim_s)"); 3 mm: $(g "$P" "$lo" heap_rms_err_mm) mm (rise $(g "$P" "$lo" rise_err_pct) %) and a pool $(awk -v a="$(g "$P" "$fine" initial_centre_height_mm)" -v b="$(g "$P" "$lo" initial_centre_height_mm)" 'BEGIN { printf "%.1f", a - b }') mm shallower (its fill holds less fluid): too coarse for a 1 cm layer |"
+else
+    echo "| particle spacing (\`fluid.spacing\` or the blocks' \`count\`) | 1.9 mm (10k in the paper's dish) | 1.2 mm (41k, the paper's) | 1.2 mm | 1.9 mm: heap $(g "$P" "$mid" heap_rms_err_mm) mm RMS off the 1.2 mm run (rise $(g "$P" "$mid" rise_err_pct) %) for 1/$(ratio "$(g "$P" "$fine" cpu_s_per_sim_s)" "$(g "$P" "$mid" cpu_s_per_sim_s)") of the cost; 3 mm: $(g "$P" "$lo" heap_rms_err_mm) mm (rise $(g "$P" "$lo" rise_err_pct) %) and a pool $(awk -v a="$(g "$P" "$fine" initial_centre_height_mm)" -v b="$(g "$P" "$lo" initial_centre_height_mm)" 'BEGIN { printf "%.1f", a - b }') mm shallower (its fill holds less fluid): too coarse for a 1 cm layer |"
+fi)
 | \`sim.solver\` | dfsph | dfsph | dfsph | WCSPH costs about the same per simulated second ($(g "$S" wcsph cpu_s_per_sim_s) vs $(g "$S" dfsph cpu_s_per_sim_s) CPU s) with $(ratio "$(g "$S" wcsph steps)" "$(g "$S" dfsph steps)")x the steps, and its heap is $(g "$S" wcsph heap_rms_err_mm) mm RMS off (rise $(g "$S" wcsph rise_err_pct) %) against DFSPH's $(g "$S" dfsph heap_rms_err_mm) mm |
 | \`sim.max_density_error\` | 1e-3 | 2e-4 | 1e-3 | 1e-3 costs 1/$(ratio "$(g "$D" 2e-4 cpu_s_per_sim_s)" "$(g "$D" 1e-3 cpu_s_per_sim_s)") of the default with the same settled heap ($(g "$D" 1e-3 heap_rms_err_mm) mm RMS), but the pool keeps $(g "$D" 1e-3 rms_speed_mm_s) mm/s RMS instead of $(g "$D" 2e-4 rms_speed_mm_s): final frames of a pool that must stand still keep 2e-4 (the default, issue 13); a large shot whose fluid moves anyway takes 1e-3 |
 | \`sim.max_dt\` [s] | 1e-3 | 1e-3 | 1e-3 | 2e-3 takes $(g "$T" 2e-3 steps) steps, as many as 1e-3 ($(g "$T" 1e-3 steps)): under a strong magnet another bound sets the step (the force criterion 0.25 sqrt(h/\|a\|) of FluidSimulation); 5e-4 costs $(ratio "$(g "$T" 5e-4 cpu_s_per_sim_s)" "$(g "$T" 1e-3 cpu_s_per_sim_s)")x for no gain ($(g "$T" 5e-4 heap_rms_err_mm) mm) |

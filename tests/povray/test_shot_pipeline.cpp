@@ -302,3 +302,88 @@ TEST_CASE("every stage walks the one exit-code table: missing input 4, bad input
     // The run that failed kept its frame 0.
     CHECK(fs::exists(dir / "sim" / "particles_0000.ply"));
 }
+
+TEST_CASE("a re-simulation re-meshes only the frames whose particles changed (issue 16)", "[pov][pipeline]")
+{
+    // scripts/shot.mk: after a re-simulation, a frame file that holds the same frame as the
+    // previous run's (scripts/frame-unchanged.sh: every particle value and every header line
+    // except the scene's name and hash) keeps the previous file's time, so make keeps its
+    // meshes. Three re-simulations of the tiny scene, surfaces only (no render): a forced re-run
+    // with nothing changed, a longer shot (one more frame), and a [sim] edit (every frame after
+    // the first changes; frame 0 is the initial fill, which the edit does not move).
+    const fs::path dir = freshDir("still_frames");
+    spit(dir / "tiny.toml", kTinyScene);
+    const fs::path out = dir / "shot";
+    REQUIRE(run("FERRO_BIN='" + pipelineBin() + "' '" + kSource + "/scripts/shot.sh' '" + (dir / "tiny.toml").string() +
+                "' '" + out.string() + "' --no-run")
+                .code == 0);
+    const std::string make = "make -C '" + out.string() + "' --no-print-directory ";
+    auto surfaces = [](int last) {
+        std::string t;
+        for (int f = 0; f <= last; ++f) t += " surface/surface_000" + std::to_string(f) + ".ply";
+        return t;
+    };
+    auto times = [&](int last) {
+        std::map<int, fs::file_time_type> t;
+        for (int f = 0; f <= last; ++f) t[f] = fs::last_write_time(out / "surface" / ("surface_000" + std::to_string(f) + ".ply"));
+        return t;
+    };
+    Result res = run(make + surfaces(3));
+    INFO(res.output);
+    REQUIRE(res.code == 0);
+    CHECK(res.output.find("frames unchanged: 0 of 4") != std::string::npos);   // the first run: nothing to keep
+    CHECK(perFrame(res.output, "ferro-surface particles").size() == 4);
+    CHECK(run(make + "-q" + surfaces(3)).code == 0);
+
+    // Re-run with nothing changed (the sim stamp touched): every frame is rewritten with the
+    // same content, none is re-meshed, and make is then up to date.
+    touchNow(out / ".scene" / "sim.toml", dir);
+    auto before = times(3);
+    res = run(make + surfaces(3));
+    INFO(res.output);
+    REQUIRE(res.code == 0);
+    CHECK(res.output.find("ferro-sim") != std::string::npos);
+    CHECK(res.output.find("frames unchanged: 4 of 4") != std::string::npos);
+    CHECK(perFrame(res.output, "ferro-surface particles").empty());
+    CHECK(times(3) == before);
+    CHECK(run(make + "-q" + surfaces(3)).code == 0);
+
+    // A longer shot (duration 0.3 -> 0.4 s): frames 0-3 come out the same; only frame 4 is meshed.
+    std::string scene = slurp(dir / "tiny.toml");
+    scene.replace(scene.find("duration = 0.3"), 14, "duration = 0.4");
+    spit(dir / "tiny.toml", scene);
+    touchNow(dir / "tiny.toml", dir);
+    before = times(3);
+    res = run(make + surfaces(4));
+    INFO(res.output);
+    REQUIRE(res.code == 0);
+    CHECK(res.output.find("frames unchanged: 4 of 5") != std::string::npos);
+    CHECK(perFrame(res.output, "ferro-surface particles") == std::map<std::string, int>{{"0004", 1}});
+    for (int f = 0; f <= 3; ++f) CHECK(fs::last_write_time(out / "surface" / ("surface_000" + std::to_string(f) + ".ply")) == before[f]);
+    CHECK(run(make + "-q" + surfaces(4)).code == 0);
+
+    // A [sim] edit that changes the motion: frames 1-4 are re-meshed, frame 0 (the fill) is not.
+    spit(dir / "tiny.toml", slurp(dir / "tiny.toml") + "\n[sim]\nmax_dt = 0.0005\n");
+    touchNow(dir / "tiny.toml", dir);
+    res = run(make + surfaces(4));
+    INFO(res.output);
+    REQUIRE(res.code == 0);
+    CHECK(res.output.find("frames unchanged: 1 of 5") != std::string::npos);
+    CHECK(perFrame(res.output, "ferro-surface particles") ==
+          std::map<std::string, int>{{"0001", 1}, {"0002", 1}, {"0003", 1}, {"0004", 1}});
+    CHECK(run(make + "-q" + surfaces(4)).code == 0);
+
+    // The helper itself: the same frame 0, two different frames, a missing old file, and a
+    // file that is not PLY (one line, exit 2).
+    const std::string cmp = "'" + kSource + "/scripts/frame-unchanged.sh' ";
+    const std::string p0 = "'" + (out / "particles" / "particles_0000.ply").string() + "' ";
+    const std::string p1 = "'" + (out / "particles" / "particles_0001.ply").string() + "' ";
+    CHECK(run(cmp + p0 + p0).code == 0);
+    CHECK(run(cmp + p0 + p1).code == 1);
+    CHECK(run(cmp + "'" + (dir / "missing.ply").string() + "' " + p0).code == 1);
+    spit(dir / "garbage.ply", "not a ply file\n");
+    res = run(cmp + p0 + "'" + (dir / "garbage.ply").string() + "'");
+    CHECK(res.code == 2);
+    CHECK(res.output.rfind("frame-unchanged.sh: error: ", 0) == 0);
+    CHECK(std::count(res.output.begin(), res.output.end(), '\n') == 1);
+}
