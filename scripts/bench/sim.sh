@@ -162,7 +162,7 @@ last 0.5 s the base run's profile changes by ${settle_um} um RMS, under the erro
   $(join_rows spacing_mm " / ") mm, the spacings of $(for n in "${counts[@]}"; do awk -v n="$n" 'BEGIN { x = 4 * n / 1000; printf (x < 10 ? "%.1fk\n" : "%.0fk\n"), x }'; done | paste -sd/ | sed 's|/| / |g')
   particles in the full dish of examples/dish.toml. The finest, ${fine} particles, is the
   reference of the ladder: its own error is zero by definition, and the others' errors are
-  against it, not against the exact solution. $(if ((fine < 40960)); then echo "The issue's 164k rung (0.77 mm, 40960
+  against it, not against the exact solution. $(if ((fine >= 40960)); then echo "Its particles end at $(awk -F, -v f="$fine" 'NR == 1 { for (i = 1; i <= NF; ++i) if ($i == "rms_speed_mm_s") c = i } $2 == f { print $c }' "$P") mm/s RMS (column rms_speed_mm_s): the heap has settled (its profile moved 5 um RMS between 1.0 and 1.5 s, measured once) while some particles at the floor keep moving (up to 0.4-0.75 m/s), an open question of the solver at 0.77 mm."; fi) $(if ((fine < 40960)); then echo "The issue's 164k rung (0.77 mm, 40960
   particles here) is not in this run: \`BENCH_SIM_164K=1\` adds it (about 30 CPU minutes for one run)."; fi)
 - **Cost noise**: the ${counts[0]}-particle run three times took $(cat "$cache"/sim/p${counts[0]}{,_rep1,_rep2}/cost | awk '{ c[NR] = $2; if (NR == 1 || $2 < lo) lo = $2; if ($2 > hi) hi = $2 } END { printf "%.2f / %.2f / %.2f CPU s (spread %.0f %% of the least)", c[1], c[2], c[3], 100 * (hi - lo) / lo }'): cost
   differences of that order between rows are noise.
