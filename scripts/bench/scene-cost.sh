@@ -56,7 +56,7 @@ done
 # ---- 2. subcritical spikes --------------------------------------------------------------------
 bench_settled_frame settled "$root/examples/magnet_slide.toml" --set "fluid.block.0.count=$count" --set "shot.preroll=$preroll"
 rm -rf "$work/fig9"
-"$bin/ferro-sim" "$root/examples/paper_fig9_approach.toml" --set "fluid.block.0.count=$count" --out "$work/fig9" --max-frames 0 --quiet
+"$bin/ferro-sim" "$root/examples/paper_fig9_approach.toml" --set "fluid.block.0.count=$count" --set shot.preroll=0 --out "$work/fig9" --max-frames 0 --quiet
 declare -A spike_line spike_cpu
 for case in subcritical supercritical disabled; do
   case $case in

@@ -486,7 +486,7 @@ TEST_CASE("particle files carry H, M and the magnets at the frame's time, and re
     const fs::path dir = fs::temp_directory_path() / ("ferro_test_mag_" + std::to_string(getpid()));
     fs::remove_all(dir);
     const std::string common = sim + " " + example("paper_fig9_approach.toml") +
-                               " --set fluid.block.0.count=3000 --quiet --out ";
+                               " --set fluid.block.0.count=3000 --set shot.preroll=0 --quiet --out ";
     REQUIRE(std::system((common + (dir / "full").string() + " --max-frames 4").c_str()) == 0);
     REQUIRE(std::system((common + (dir / "part").string() + " --max-frames 2").c_str()) == 0);
     REQUIRE(std::system((common + (dir / "part").string() + " --max-frames 4 --resume").c_str()) == 0);
