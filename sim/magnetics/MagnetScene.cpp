@@ -83,6 +83,7 @@ MagnetizationParams parseMagnetization(const SceneDocument& doc)
     if (!(p.smoothing == 0 || (p.smoothing >= 1 && p.smoothing <= 6)))
         r.fail("smoothing", "must be 0 (uniformly magnetized spheres) or in [1, 6] particle spacings (got " +
                                 formatNumber(p.smoothing) + ")");
+    p.localCorrection = r.boolean("local_correction", p.localCorrection);
     p.resolveEvery = r.integerInRange("resolve_every", p.resolveEvery, 0, INT_MAX);
     p.maxIterations = r.integerInRange("max_iterations", p.maxIterations, 1, 10000);
     if (r.has("induced_force"))

@@ -623,6 +623,13 @@ TEST_CASE("magnetization.smoothing selects the particle model", "[scene]")
                Contains("magnetization.smoothing: must be 0 (uniformly magnetized spheres) or in [1, 6]"));
 }
 
+TEST_CASE("magnetization.local_correction switches the smoothed model's local correction", "[scene]")
+{
+    CHECK_FALSE(scene(kMinimal).magnetization.localCorrection); // off by default
+    CHECK(scene(kMinimal + "[magnetization]\nlocal_correction = true\n").magnetization.localCorrection);
+    CHECK_THAT(sceneError(kMinimal + "[magnetization]\nlocal_correction = 1\n"), Contains("magnetization.local_correction"));
+}
+
 TEST_CASE("a table header with three brackets is a syntax error on its line (fuzz finding)", "[scene]")
 {
     // toml++ 3.3.0 asserts on it in a build with assertions; the library Ferro links reports
