@@ -239,8 +239,8 @@ private:
     std::vector<float> px_, py_, pz_, a2_, ainv_, vol_; // a2_, ainv_: core radius^2, 1 / core radius
     std::vector<float> mx_, my_, mz_;  // moments V M (scaled volume), set by setMagnetization
     std::vector<float> surfaceWeight_, surfaceNormal_; // per particle w = max(0, 1 - n), outward normal (3)
-    std::vector<float> localCorrection_;
-    bool surfaceOnset_ = true; // per particle D_k (9, row-major), see computeLocalCorrection
+    std::vector<float> localCorrection_; // per particle D_k (9, row-major), see computeLocalCorrection
+    bool surfaceOnset_ = true;           // see setSurfaceOnset
     std::vector<Node> nodes_;
     std::vector<float> cell_;            // per cell: moment, quadrupole, octupole (see .cpp)
     std::vector<uint32_t> leaves_;       // node index of each leaf, increasing begin

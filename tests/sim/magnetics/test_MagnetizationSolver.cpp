@@ -715,8 +715,8 @@ std::vector<Real> sphVolumes(const std::vector<Vec3>& x, double s) {
 
 TEST_CASE("Disordered balls: figures of the particle models", "[.figures]") {
     // Not run by default (build/bin/ferro_magnetics_tests "[.figures]"): the table of the
-    // closing report, direct solver. Models: smoothed dipoles with the local correction (the
-    // default), without it, without it on SPH volumes, and the old sphere model.
+    // closing report, direct solver. Models: smoothed dipoles with the local correction (an
+    // option, off by default), without it (the default), without it on SPH volumes, and the old sphere model.
     std::vector<Vec3> xs, xj;
     std::vector<Real> Vs, Vj;
     double s = 0;
