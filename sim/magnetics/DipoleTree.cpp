@@ -829,6 +829,31 @@ void DipoleTree::addSurfaceTerm(size_t k, double h[3]) const {
     for (int a = 0; a < 3; ++a) h[a] -= double(surfaceWeight_[k]) * mn * nk[a];
 }
 
+void DipoleTree::leavesWithin(const Node& target, double reach, std::vector<uint32_t>& stack,
+                              std::vector<uint32_t>& ranges) const {
+    auto boxGap = [](const Node& a, const Node& b) {
+        double d2 = 0;
+        for (int k = 0; k < 3; ++k) {
+            const double g = std::max({0.0, double(a.lo[k]) - b.hi[k], double(b.lo[k]) - a.hi[k]});
+            d2 += g * g;
+        }
+        return std::sqrt(d2);
+    };
+    ranges.clear();
+    stack.assign(1, 0);
+    while (!stack.empty()) {
+        const Node& node = nodes_[stack.back()];
+        stack.pop_back();
+        if (boxGap(node, target) >= reach) continue;
+        if (node.childCount > 0) {
+            for (uint32_t c = 0; c < node.childCount; ++c) stack.push_back(node.firstChild + c);
+        } else {
+            ranges.push_back(node.begin);
+            ranges.push_back(node.end);
+        }
+    }
+}
+
 void DipoleTree::computeSurfaceTerms() {
     // n_k = sum_j V_j W_j(x_k - x_j), the filled fraction of particle k's kernel (1 inside
     // the fluid), and its gradient. Targets are grouped by leaf: one range search of the
@@ -839,31 +864,11 @@ void DipoleTree::computeSurfaceTerms() {
     surfaceNormal_.assign(3 * n, 0.0f);
     if (n == 0 || nodes_.empty()) return;
     const float reach = nodes_[0].maxA; // largest support
-    auto boxGap = [](const Node& a, const Node& b) {
-        double d2 = 0;
-        for (int k = 0; k < 3; ++k) {
-            const double g = std::max({0.0, double(a.lo[k]) - b.hi[k], double(b.lo[k]) - a.hi[k]});
-            d2 += g * g;
-        }
-        return std::sqrt(d2);
-    };
     tbb::parallel_for(tbb::blocked_range<size_t>(0, leaves_.size(), 4), [&](const tbb::blocked_range<size_t>& r) {
         std::vector<uint32_t> stack, ranges;
         for (size_t l = r.begin(); l < r.end(); ++l) {
             const Node& target = nodes_[leaves_[l]];
-            ranges.clear();
-            stack.assign(1, 0);
-            while (!stack.empty()) {
-                const Node& node = nodes_[stack.back()];
-                stack.pop_back();
-                if (boxGap(node, target) >= reach) continue;
-                if (node.childCount > 0) {
-                    for (uint32_t c = 0; c < node.childCount; ++c) stack.push_back(node.firstChild + c);
-                } else {
-                    ranges.push_back(node.begin);
-                    ranges.push_back(node.end);
-                }
-            }
+            leavesWithin(target, reach, stack, ranges);
             for (uint32_t k = target.begin; k < target.end; ++k) {
                 const float px = px_[k], py = py_[k], pz = pz_[k];
                 double dens = 0, grad[3] = {0, 0, 0};
@@ -930,14 +935,6 @@ void DipoleTree::computeLocalCorrection(bool useTree) {
 
     std::vector<float> D(9 * n, 0.0f);
     const double reach = kCorrectionReach * nodes_[0].maxA;
-    auto boxGap = [](const Node& a, const Node& b) {
-        double d2 = 0;
-        for (int k = 0; k < 3; ++k) {
-            const double g = std::max({0.0, double(a.lo[k]) - b.hi[k], double(b.lo[k]) - a.hi[k]});
-            d2 += g * g;
-        }
-        return std::sqrt(d2);
-    };
     auto wendland = [](double r2, double A2) { // 2 pi A^3 / 21 * W(r; A): the shape only
         const double q = std::sqrt(r2 / A2), u = 1 - q;
         return u * u * u * u * (1 + 4 * q);
@@ -946,19 +943,7 @@ void DipoleTree::computeLocalCorrection(bool useTree) {
         std::vector<uint32_t> stack, ranges;
         for (size_t l = r.begin(); l < r.end(); ++l) {
             const Node& target = nodes_[leaves_[l]];
-            ranges.clear();
-            stack.assign(1, 0);
-            while (!stack.empty()) {
-                const Node& node = nodes_[stack.back()];
-                stack.pop_back();
-                if (boxGap(node, target) >= reach) continue;
-                if (node.childCount > 0) {
-                    for (uint32_t c = 0; c < node.childCount; ++c) stack.push_back(node.firstChild + c);
-                } else {
-                    ranges.push_back(node.begin);
-                    ranges.push_back(node.end);
-                }
-            }
+            leavesWithin(target, reach, stack, ranges);
             for (uint32_t k = target.begin; k < target.end; ++k) {
                 // Smooth part of K at x_k: a weighted linear least-squares fit over the
                 // neighbours (moving least squares), its value at x_k. A plain weighted mean

@@ -224,6 +224,10 @@ private:
     void treeFieldAt(size_t leaf, size_t k, const std::vector<float>& buf, size_t farCount, double h[3]) const;
     // Surface sampling term (smoothed model only): h -= w_k (n_k . M_k) n_k, see the file comment.
     void computeSurfaceTerms();
+    /// Particle ranges [begin, end) of the leaves whose boxes lie closer than reach [m] to
+    /// target's box, as pairs in ranges (stack: scratch); used by the local passes.
+    void leavesWithin(const Node& target, double reach, std::vector<uint32_t>& stack,
+                      std::vector<uint32_t>& ranges) const;
     void addSurfaceTerm(size_t k, double h[3]) const;
     template <class Leaf, class Cell>
     void traverse(const Eigen::Vector3d& q, Leaf&& leaf, Cell&& cell) const;
