@@ -574,6 +574,29 @@ TEST_CASE("a pool over a magnet held still comes to rest in ferrohydrostatic bal
     }
 }
 
+// The same pool and law at four times the particles (10,240, spacing 1.6x finer), the
+// resolution the suite cannot afford (about 2 CPU minutes a case): hidden, run by hand with
+//     build/bin/ferro_sph_tests "[bernoulli-fine]"
+// It asserts the issue's 10 % of the centre rise; the suite's test above holds 25 % at 2,560.
+TEST_CASE("a finer pool over a still magnet meets the ferrohydrostatic Bernoulli law within 10 %",
+          "[.][bernoulli-fine][magnetics][slow]") {
+    const double chi0 = GENERATE(0.5, 1.5);
+    FluidSimulation sim(loadExample("ferrohydrostatic_pool.toml",
+                                    {"fluid.block.0.count=10240", "magnetization.susceptibility=" + std::to_string(chi0)}));
+    double rms = 0;
+    for (int frame = 1; frame <= 8; ++frame) {
+        sim.advanceTo(0.25 * frame);
+        rms = rmsSpeedOf(sim);
+    }
+    REQUIRE(allFinite(sim));
+    const BernoulliCheck law = bernoulliCheck(sim, 0.025);
+    WARN("Bernoulli, 10,240 particles, chi0 " << chi0 << ": centre rise " << law.rise << " Pa, worst deviation "
+         << law.worst << " Pa (" << 100 * law.worst / law.rise << " %); on the axis mu0 F = " << law.pressure
+         << " Pa, mu0 Mn^2/2 = " << law.traction << " Pa; RMS speed " << 1e3 * rms << " mm/s");
+    REQUIRE(rms < 0.001);
+    REQUIRE(law.worst < 0.10 * law.rise);
+}
+
 namespace {
 
 /// Particles with no other particle within the SPH support radius: nothing holds them to
