@@ -33,6 +33,7 @@ RenderParams parseRenderParams(const SceneDocument& doc)
     p.antialias = r.boolean("antialias", p.antialias);
     p.antialiasThreshold = r.positive("antialias_threshold", p.antialiasThreshold);
     p.antialiasDepth = r.integerInRange("antialias_depth", p.antialiasDepth, 1, 9);
+    p.lightSamples = r.integerInRange("light_samples", p.lightSamples, 1, 9);
     p.magnetLength = r.positive("magnet_length", p.magnetLength);
     p.magnetRadius = r.positive("magnet_radius", p.magnetRadius);
     r.finish();

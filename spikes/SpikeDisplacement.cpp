@@ -42,14 +42,15 @@ TipSums sumNearbyTips(const Pattern& pat, const Vec3d& x)
     TipSums sums;
     pat.grid->forEachWithin(x, R, [&](uint32_t t, double d2) {
         const Tip& tip = pat.tips[t];
+        if (!(tip.ownership > 0)) return;
         const double q = 1.0 - d2 / (R * R);
-        const double wt = q * q;
+        const double wt = q * q * tip.ownership;
         const Eigen::Vector2d ab = tip.toLattice * (x - tip.position);
         sums.s += wt * hexProfile(ab.x(), ab.y());
         sums.w += wt;
         if (d2 < Rn * Rn) {
             const double qn = 1.0 - d2 / (Rn * Rn);
-            const double wn = qn * qn * qn * qn;
+            const double wn = qn * qn * qn * qn * tip.ownership;
             sums.a += wn * tip.amplitude;
             sums.dir += wn * tip.direction;
             sums.wa += wn;
@@ -87,22 +88,27 @@ double spikeDisplacement(const SpikeSurface& surface, const Vec3d& x, const Vec3
     const double fade = fields.surfaceGate(x, H) *
                         (wall.grid.empty() ? 1.0 : smoothstep01(wall.grid.nearestDistance(x, wall.fade) / wall.fade));
     if (fade <= 0) return 0;
-    // Per pattern: eq. 13 from every nearby tip's lattice map, blended by a smooth partition
-    // of unity (radius l; exact on a regular lattice), and each spike's amplitude and
-    // direction from its own tip (a narrow kernel, radius 0.75 l, so each spike is a rigid,
-    // symmetric cone leaning along the field at its tip; blended between spikes).
+    // Eq. 13 from every nearby tip's lattice map, blended by a smooth partition of unity
+    // (radius l; exact on a regular lattice), and each spike's amplitude and direction from its
+    // own tip (a narrow kernel, radius 0.75 l, so each spike is a rigid, symmetric cone leaning
+    // along the field at its tip; blended between spikes). One partition over the tips of all
+    // patterns, each tip weighted by its ownership (settleSeams): where two patterns meet, the
+    // surface peaks at the tips that won the seam instead of averaging two lattices. Where a
+    // pattern's share of the field dominance falls under 0.3 its tips fade out of the blend
+    // (gone under 0.1): a pattern of wider spacing would otherwise reach with its kernel deep
+    // into its neighbour's domain and bend the neighbour's spikes.
     double S = 0, W = 0, A = 0, WA = 0;
     Vec3d D = Vec3d::Zero();
     const Dominance dominance = patternDominance(surface, x);
     for (size_t p = 0; p < patterns.size(); ++p) {
-        const double d = dominance.share(p);
-        if (d < 1e-4) continue;
+        const double gate = patterns.size() == 1 ? 1.0 : smoothstep01((dominance.share(p) - 0.1) / 0.2);
+        if (!(gate > 0)) continue;
         const TipSums sums = sumNearbyTips(patterns[p], x);
-        S += d * sums.s;
-        W += d * sums.w;
-        A += d * sums.a;
-        D += d * sums.dir;
-        WA += d * sums.wa;
+        S += gate * sums.s;
+        W += gate * sums.w;
+        A += gate * sums.a;
+        D += gate * sums.dir;
+        WA += gate * sums.wa;
     }
     if (!(W > 0)) return 0;
     const double coverage = smoothstep01(W / 0.4);

@@ -42,8 +42,8 @@ struct SpikeSurface {
 };
 
 /// The displacement [m] at surface point x [m] with unit outward normal nx, along `direction`
-/// (unit). Per pattern, weighted by its share of fieldDominance: eq. 13 from every tip within l
-/// (its lattice map applied to x, F blended by the partition of unity (1 - d^2/l^2)^2, exact on
+/// (unit). Over the tips of every pattern, each weighted by its ownership (settleSeams: 1 with
+/// one pattern): eq. 13 from every tip within its pattern's l (its lattice map applied to x, F blended by the partition of unity (1 - d^2/l^2)^2, exact on
 /// a regular lattice; sharpened by P.sharpness), the amplitude C0 (eq. 14) and direction from
 /// the tips within 0.75 l (weight (1 - d^2/(0.75 l)^2)^4, so each spike is a rigid, symmetric
 /// cone leaning along the field at its tip), the local field's C0 and direction taking over far

@@ -1,5 +1,6 @@
 // Tracing the hexagonal lattice of SpikeLattice.hpp.
 #include "spikes/SpikeLattice.hpp"
+#include "spikes/SpikeDisplacement.hpp"
 
 #include "sim/core/Constants.hpp"
 
@@ -216,6 +217,67 @@ void traceLattice(Pattern& pat, const FreeSurface& surface, const SurfaceFields&
     std::vector<Vec3d> positions;
     for (const Tip& tip : pat.tips) positions.push_back(tip.position);
     pat.grid = std::make_unique<PointGrid>(positions, l);
+}
+
+void settleSeams(std::vector<Pattern>& patterns, const std::vector<Magnet>& magnets)
+{
+    if (patterns.size() < 2) return;
+    // Each tip's share of the field dominance at its own position.
+    std::vector<std::vector<double>> share(patterns.size());
+    for (size_t p = 0; p < patterns.size(); ++p) {
+        for (const Tip& tip : patterns[p].tips) {
+            double own = 0, all = 0;
+            for (size_t q = 0; q < patterns.size(); ++q) {
+                const double d = fieldDominance(magnetField(magnets[size_t(patterns[q].info.magnet)], tip.position));
+                all += d;
+                if (q == p) own = d;
+            }
+            share[p].push_back(all > 0 ? own / all : 1.0 / double(patterns.size()));
+        }
+    }
+    // A tip's ownership starts from its pattern's share: smoothstep((share - 0.2) / 0.2), so
+    // a pattern's lattice where another magnet dominates (share under 0.2) leaves nothing.
+    // Then every pair of tips of two patterns closer than 0.6 l merges by
+    // m = 1 - smoothstep((d / l - 0.3) / 0.3) (fully from 0.3 l in). Each tip yields by
+    // y = smoothstep(0.5 + (other's share - own share) / 0.2): it moves m y of the way to the
+    // other tip and keeps 1 - m y of its ownership. The tip of the dominating pattern stays,
+    // the other vanishes into it; at a tie both meet at the midpoint with half each, and two
+    // half spikes on one point are one spike. Pairs 0.6 l apart or more both stay: closer
+    // than the lattice's l, but no hole. Everything is read from the traced tips and written
+    // afterwards: the result does not depend on the order of the pairs.
+    std::vector<std::vector<double>> merged(patterns.size());
+    std::vector<std::vector<Vec3d>> shift(patterns.size());
+    for (size_t p = 0; p < patterns.size(); ++p) {
+        for (size_t t = 0; t < patterns[p].tips.size(); ++t)
+            merged[p].push_back(smoothstep01((share[p][t] - 0.2) / 0.2));
+        shift[p].assign(patterns[p].tips.size(), Vec3d::Zero());
+    }
+    for (size_t p = 0; p < patterns.size(); ++p) {
+        for (size_t t = 0; t < patterns[p].tips.size(); ++t) {
+            const Tip& tip = patterns[p].tips[t];
+            for (size_t q = 0; q < patterns.size(); ++q) {
+                if (q == p) continue;
+                const double l = std::min(patterns[p].info.spacing, patterns[q].info.spacing);
+                patterns[q].grid->forEachWithin(tip.position, 0.6 * l, [&](uint32_t u, double d2) {
+                    if (!(share[q][u] > 0.2)) return;   // an owned tip only
+                    const double m = 1.0 - smoothstep01((std::sqrt(d2) / l - 0.3) / 0.3);
+                    const double yields = smoothstep01(0.5 + (share[q][u] - share[p][t]) / 0.2);
+                    merged[p][t] *= 1.0 - m * yields;
+                    shift[p][t] += m * yields * (patterns[q].tips[u].position - tip.position);
+                });
+            }
+        }
+    }
+    for (size_t p = 0; p < patterns.size(); ++p) {
+        std::vector<Vec3d> positions;
+        for (size_t t = 0; t < patterns[p].tips.size(); ++t) {
+            Tip& tip = patterns[p].tips[t];
+            tip.ownership = merged[p][t];
+            tip.position += shift[p][t];
+            positions.push_back(tip.position);
+        }
+        patterns[p].grid = std::make_unique<PointGrid>(positions, patterns[p].info.spacing);
+    }
 }
 
 } // namespace ferro

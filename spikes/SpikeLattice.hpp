@@ -35,6 +35,8 @@ struct Tip {
     Eigen::Matrix<double, 2, 3> toLattice; // maps an offset from the tip [m] to lattice coordinates
     double amplitude = 0;                  // C0 at the tip (eq. 14, capped) [m]
     Vec3d direction{0, 0, 1};              // growth direction at the tip
+    double ownership = 1;                  // 0..1: how much of a spike it keeps where patterns meet
+                                           // (settleSeams; 1 with a single pattern)
 };
 
 /// One magnet's pattern: its public description (origin x0, normal, first axis e1, spacing l),
@@ -56,5 +58,17 @@ struct Pattern {
 /// eq. 14, and its growth direction), pat.info.rings and pat.grid.
 void traceLattice(Pattern& pat, const FreeSurface& surface, const SurfaceFields& fields, const SpikeParams& P,
                   double Mc, double diagonal);
+
+/// Phase 3b, where two or more patterns meet (issue 14's "two magnets brought together"):
+/// each tip's ownership (0..1, Tip::ownership) starts from its pattern's share of the summed
+/// fieldDominance at the tip (none under 0.2, full over 0.4); two tips of different patterns
+/// closer than 0.6 of the smaller spacing merge, fully from 0.3 l in: the tip with the smaller
+/// share moves onto the other and gives up its ownership; at a tie both meet at the midpoint
+/// with half each. The displacement then blends the tips of all patterns with these weights
+/// (one partition of unity over the union of tips) instead of blending whole patterns point by
+/// point, which averaged two unrelated lattices into low bumps along the seam. Only tip
+/// positions and the field enter, so merges move smoothly with the magnets. With one pattern
+/// nothing changes (ownership 1).
+void settleSeams(std::vector<Pattern>& patterns, const std::vector<Magnet>& magnets);
 
 } // namespace ferro

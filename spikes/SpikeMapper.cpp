@@ -214,26 +214,37 @@ void conserveVolume(TriangleMesh& out, const RefinedSurface& refined, const std:
     }
 }
 
-// The tips that grew (displacement > 0 at the tip, and the tip's pattern in charge there:
-// at least half the summed fieldDominance), pattern by pattern, into res.tips and
-// res.maxHeight [m]; every pattern's info into res.patterns.
+// Whether a tip of pattern p stands for a peak of the surface: the ownership of the tips of
+// every pattern within 0.3 l of it (a merged pair: settleSeams) sums to at least 0.5, and
+// none of those keeps more than it (a tie: the earlier pattern reports the peak).
+bool ownsPeak(const std::vector<Pattern>& patterns, size_t p, const Tip& tip)
+{
+    double total = tip.ownership;
+    bool owns = true;
+    for (size_t q = 0; q < patterns.size(); ++q) {
+        if (q == p) continue;
+        const double l = std::min(patterns[p].info.spacing, patterns[q].info.spacing);
+        patterns[q].grid->forEachWithin(tip.position, 0.3 * l, [&](uint32_t u, double) {
+            const double other = patterns[q].tips[u].ownership;
+            total += other;
+            if (other > tip.ownership || (other == tip.ownership && q < p)) owns = false;
+        });
+    }
+    return owns && total >= 0.5;
+}
+
+// The tips that grew (displacement > 0 at the tip) and own their peak (ownsPeak), pattern by
+// pattern, into res.tips and res.maxHeight [m]; every pattern's info into res.patterns.
 void reportTips(const SpikeSurface& surface, SpikeResult& res)
 {
     const std::vector<Pattern>& patterns = surface.patterns;
     for (size_t p = 0; p < patterns.size(); ++p) {
         for (const Tip& tip : patterns[p].tips) {
+            if (!ownsPeak(patterns, p, tip)) continue;
             double w;
             Vec3d dir;
             const double z = spikeDisplacement(surface, tip.position, tip.normal, w, dir);
             if (!(z > 0)) continue;
-            // Only where this pattern is in charge is the tip a peak of the blended surface.
-            double own = 0, all = 0;
-            for (const Pattern& q : patterns) {
-                const double h2 = fieldDominance(magnetField(surface.magnets[size_t(q.info.magnet)], tip.position));
-                all += h2;
-                if (&q == &patterns[p]) own = h2;
-            }
-            if (all > 0 && own < 0.5 * all) continue;
             SpikeTip t;
             t.pattern = int(p);
             t.i = tip.i;
@@ -286,6 +297,7 @@ SpikeResult addSpikes(const SpikeInput& in, const SpikeParams& P)
 
     // 3. Tips (Fig. 7): trace six axes along the surface, fill the rings between them.
     for (Pattern& pat : patterns) traceLattice(pat, freeSurface, fields, P, Mc, diagonal);
+    settleSeams(patterns, in.magnets);
 
     // 4. Refine the supercritical region (and one ring around it) to l / resolution.
     RefinedSurface refined = refineSpikyRegion(input, region.active, patterns, P);

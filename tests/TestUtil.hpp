@@ -10,6 +10,7 @@
 #include <filesystem>
 #include <fstream>
 #include <sstream>
+#include <stdexcept>
 #include <string>
 #include <system_error>
 #include <vector>
@@ -38,6 +39,17 @@ inline std::string slurp(const std::filesystem::path& path) {
     ss << in.rdbuf();
     return ss.str();
 }
+
+#ifdef FERRO_SOURCE_DIR
+/// The small resting pool of the pipeline tests (tests/data/small_pool.toml: a 4 cm dish, a
+/// 5 mm layer of 2,000 particles, a pre-roll) followed by `extra` (magnets, [magnetization],
+/// [render]): one scene text, so the tests that share it cannot drift apart.
+inline std::string smallPoolScene(const std::string& extra) {
+    const std::string base = slurp(std::string(FERRO_SOURCE_DIR) + "/tests/data/small_pool.toml");
+    if (base.empty()) throw std::runtime_error("tests/data/small_pool.toml: cannot be read");
+    return base + "\n" + extra;
+}
+#endif
 
 /// Replaces the file at `path` by exactly `bytes` (plainly, not atomically: test input only).
 inline void spit(const std::filesystem::path& path, const std::string& bytes) {

@@ -119,8 +119,12 @@ TEST_CASE("[render] defaults, overrides and unknown keys", "[pov]")
     CHECK(def.width == 640);
     CHECK(def.cameraAngle == 40.0);
     const RenderParams r = parseRenderParams(
-        SceneDocument::parse(dishScene("[render]\nwidth = 320\nheight = 200\nantialias = false\n"), "s.toml",
-                             {"render.camera_angle=30"}));
+        SceneDocument::parse(dishScene("[render]\nwidth = 320\nheight = 200\nantialias = false\nlight_samples = 2\n"),
+                             "s.toml", {"render.camera_angle=30"}));
+    CHECK(def.lightSamples == 3);
+    CHECK(r.lightSamples == 2);
+    CHECK_THROWS_WITH(parseRenderParams(SceneDocument::parse(dishScene("[render]\nlight_samples = 0\n"), "s.toml")),
+                      Catch::Contains("render.light_samples"));
     CHECK(r.width == 320);
     CHECK(r.height == 200);
     CHECK_FALSE(r.antialias);
@@ -141,6 +145,9 @@ TEST_CASE("[render] defaults, overrides and unknown keys", "[pov]")
     ShotDescription shot = describeShot(SceneDocument::parse(dishScene("[render]\nwidth = 320\n"), "s.toml"));
     CHECK(shot.lastFrame == 5); // 0.5 s at 10 fps
     CHECK(renderIni(shot).find("Width=320\n") != std::string::npos);
+    CHECK(masterScene(describeShot(SceneDocument::parse(dishScene("[render]\nlight_samples = 2\n"), "s.toml")))
+              .find("#declare FerroLightSamples = 2;") != std::string::npos);
+    CHECK(lookTemplate().find("area_light x * Size, z * Size, FerroLightSamples, FerroLightSamples") != std::string::npos);
     CHECK(shotIni(shot).find("Final_Frame=5\n") != std::string::npos);
     CHECK(shotIni(shot).find("Final_Clock=0.5\n") != std::string::npos);
     CHECK(masterScene(shot).find("#declare FerroDishRadius = 50;") != std::string::npos);

@@ -16,30 +16,7 @@ namespace {
 
 // A 4 cm dish with a 5 mm layer of 2,000 particles (spacing 1.33 mm), no magnet, settled by
 // the pre-roll. Looked at from above at a slant, so the pool fills the picture.
-const char* kScene = R"(
-[shot]
-fps = 30
-duration = 1.0
-preroll = 1.5
-
-[fluid]
-rest_density = 1200.0
-viscosity = 5e-6
-surface_tension = 0.025
-
-[[fluid.block]]
-shape = "cylinder"
-center = [0.0, 0.0, 0.0]
-radius = 0.02
-height = 0.005
-count = 2000
-
-[container]
-type = "dish"
-center = [0.0, 0.0, 0.0]
-radius = 0.02
-height = 0.01
-
+const char* kSceneExtra = R"(
 [render]
 camera_position = [0.0, -0.05, 0.05]
 camera_target = [0.0, 0.0, 0.004]
@@ -86,7 +63,7 @@ TopSurface topSurface(const TriangleMesh& mesh, double spacing) {
 TEST_CASE("a pool at rest after the pre-roll is a calm mirror and renders the same frame after frame", "[pov][povray][preroll]")
 {
     const fs::path dir = freshDir("resting_pool");
-    spit(dir / "pool.toml", kScene);
+    spit(dir / "pool.toml", test::smallPoolScene(kSceneExtra));
     const std::string scene = (dir / "pool.toml").string();
     const Result sim = run(kBin + "ferro-sim " + scene + " --out " + (dir / "particles").string() + " --max-frames 4 -q");
     INFO(sim.output);

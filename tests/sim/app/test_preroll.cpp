@@ -19,30 +19,7 @@ const std::string kSim = std::string(FERRO_BINARY_DIR) + "/bin/ferro-sim";
 // A 4 cm dish with a 5 mm layer (2,000 particles) over a dipole 12 mm under the floor that
 // slides sideways from t = 0.6 s (three equal keys: Catmull-Rom's tangents are zero until
 // then, the magnet is exactly still): the pre-roll must hold it where it is at t = 0.
-const char* kScene = R"(
-[shot]
-fps = 30
-duration = 1.0
-preroll = 1.5
-
-[fluid]
-rest_density = 1200.0
-viscosity = 5e-6
-surface_tension = 0.025
-
-[[fluid.block]]
-shape = "cylinder"
-center = [0.0, 0.0, 0.0]
-radius = 0.02
-height = 0.005
-count = 2000
-
-[container]
-type = "dish"
-center = [0.0, 0.0, 0.0]
-radius = 0.02
-height = 0.01
-
+const char* kSceneExtra = R"(
 [[magnets]]
 kind = "dipole"
 position = [0.0, 0.0, -0.012]
@@ -94,7 +71,7 @@ double topZ(const ParticleTable& t, double r0, double r1) {
 
 TEST_CASE("a pre-roll settles the fill before frame 0 with the magnets held at t = 0, cached and reused", "[cli][preroll]") {
     TempDir d("preroll");
-    const std::string scene = d.write("small.toml", kScene);
+    const std::string scene = d.write("small.toml", smallPoolScene(kSceneExtra));
     const std::string sim = kSim + " " + scene + " --max-frames 3 ";
 
     // Without a pre-roll frame 0 is the lattice fill and the first frames move.
@@ -153,7 +130,7 @@ TEST_CASE("a pre-roll settles the fill before frame 0 with the magnets held at t
 
 TEST_CASE("a negative pre-roll is refused with one line naming the key", "[cli][preroll]") {
     TempDir d("preroll_bad");
-    const std::string scene = d.write("small.toml", kScene);
+    const std::string scene = d.write("small.toml", smallPoolScene(kSceneExtra));
     const CommandResult r = runCommand(kSim + " " + scene + " --set shot.preroll=-1 --out " + d.file("o"));
     REQUIRE(r.code == 2);
     REQUIRE(std::count(r.output.begin(), r.output.end(), '\n') == 1);

@@ -18,38 +18,16 @@ namespace {
 const std::string kBin = std::string(FERRO_BINARY_DIR) + "/bin/";
 const std::string kData = std::string(FERRO_SOURCE_DIR) + "/tests/data/";
 
-// The demo's end in small: a 4 cm dish with a 5 mm layer of 2,000 particles (spacing 1.33
-// mm) over a 0.5 A m^2 dipole held 12 mm under the floor (the fluid heaps ~3 mm over it),
+// The demo's end in small: the small pool of tests/data/small_pool.toml (a 4 cm dish, a 5 mm
+// layer of 2,000 particles, spacing 1.33 mm) over a 0.5 A m^2 dipole held 12 mm under the floor (the fluid heaps ~3 mm over it),
 // the demo's ferrofluid (chi0 1.5, Ms 35 kA/m, magnetization solver `auto`). Settled by the
 // pre-roll; its result ships as tests/data/still_magnet_preroll.ply (how it was made:
 // scripts/make_still_magnet_preroll.sh), so the test simulates only the 30 frames. The
-// fingerprint in that file keys it to exactly this text: any change to the sections it
+// fingerprint in that file keys it to exactly this scene (the small pool's values and this
+// text's): any change to the sections it
 // depends on (or to the pre-roll's key) makes ferro-sim run the pre-roll again (correct, but
 // about 25 CPU seconds slower), which the test reports.
-const char* kScene = R"(
-[shot]
-fps = 30
-duration = 1.0
-preroll = 1.5
-
-[fluid]
-rest_density = 1200.0
-viscosity = 5e-6
-surface_tension = 0.025
-
-[[fluid.block]]
-shape = "cylinder"
-center = [0.0, 0.0, 0.0]
-radius = 0.02
-height = 0.005
-count = 2000
-
-[container]
-type = "dish"
-center = [0.0, 0.0, 0.0]
-radius = 0.02
-height = 0.01
-
+const char* kSceneExtra = R"(
 [[magnets]]
 kind = "dipole"
 position = [0.0, 0.0, -0.012]
@@ -69,7 +47,7 @@ TEST_CASE("a still magnet over a resting pool keeps its spike tips: 98 % matched
           "births or deaths",
           "[tips][pipeline][preroll]") {
     TempDir d("still_tips");
-    const std::string scene = d.write("still.toml", kScene);
+    const std::string scene = d.write("still.toml", smallPoolScene(kSceneExtra));
     // A copy: ferro-sim rewrites a stale cache, and the source tree stays untouched.
     for (const char* dir : {"particles", "surface", "spiky"}) std::filesystem::create_directories(d.file(dir));
     std::filesystem::copy_file(kData + "still_magnet_preroll.ply", d.file("particles/preroll.ply"));
