@@ -43,7 +43,9 @@ struct SpikeSurface {
 
 /// The displacement [m] at surface point x [m] with unit outward normal nx, along `direction`
 /// (unit). Over the tips of every pattern, each weighted by its ownership (settleSeams: 1 with
-/// one pattern): eq. 13 from every tip within its pattern's l (its lattice map applied to x, F blended by the partition of unity (1 - d^2/l^2)^2, exact on
+/// one pattern) and, with several patterns, faded out where its pattern's share of the field
+/// dominance at x is under 0.3 (gone under 0.1): eq. 13 from every tip within its pattern's l
+/// (its lattice map applied to x, F blended by the partition of unity (1 - d^2/l^2)^2, exact on
 /// a regular lattice; sharpened by P.sharpness), the amplitude C0 (eq. 14) and direction from
 /// the tips within 0.75 l (weight (1 - d^2/(0.75 l)^2)^4, so each spike is a rigid, symmetric
 /// cone leaning along the field at its tip), the local field's C0 and direction taking over far
