@@ -7,26 +7,18 @@
 
 namespace ferro {
 
-namespace {
-
-// Each pattern's field dominance at a point and their sum.
-struct Dominance {
-    std::vector<double> dominance; // per pattern
-    double sum = 0;
-    // The pattern's share of the blend (equal shares where no magnet has a field).
-    double share(size_t p) const { return sum > 0 ? dominance[p] / sum : 1.0 / double(dominance.size()); }
-};
-
-Dominance patternDominance(const SpikeSurface& s, const Vec3d& x)
+Dominance patternDominance(const std::vector<Pattern>& patterns, const std::vector<Magnet>& magnets, const Vec3d& x)
 {
     Dominance d;
-    d.dominance.resize(s.patterns.size());
-    for (size_t p = 0; p < s.patterns.size(); ++p) {
-        d.dominance[p] = fieldDominance(magnetField(s.magnets[size_t(s.patterns[p].info.magnet)], x));
+    d.dominance.resize(patterns.size());
+    for (size_t p = 0; p < patterns.size(); ++p) {
+        d.dominance[p] = fieldDominance(magnetField(magnets[size_t(patterns[p].info.magnet)], x));
         d.sum += d.dominance[p];
     }
     return d;
 }
+
+namespace {
 
 // One pattern's tips around a point: the partition-of-unity sums of eq. 13's profile (s, over
 // weights w, radius l) and the narrow-kernel sums of amplitude and direction (a, dir, over
@@ -99,7 +91,7 @@ double spikeDisplacement(const SpikeSurface& surface, const Vec3d& x, const Vec3
     // into its neighbour's domain and bend the neighbour's spikes.
     double S = 0, W = 0, A = 0, WA = 0;
     Vec3d D = Vec3d::Zero();
-    const Dominance dominance = patternDominance(surface, x);
+    const Dominance dominance = patternDominance(patterns, surface.magnets, x);
     for (size_t p = 0; p < patterns.size(); ++p) {
         const double gate = patterns.size() == 1 ? 1.0 : smoothstep01((dominance.share(p) - 0.1) / 0.2);
         if (!(gate > 0)) continue;

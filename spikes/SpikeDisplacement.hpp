@@ -20,6 +20,17 @@ inline double fieldDominance(const Vec3d& H)
     return h2 * h2 * h2;
 }
 
+/// Each pattern's fieldDominance at a point (from its own magnet's field) and their sum.
+struct Dominance {
+    std::vector<double> dominance; ///< per pattern
+    double sum = 0;
+    /// The pattern's share of the blend (equal shares where no magnet has a field).
+    double share(size_t p) const { return sum > 0 ? dominance[p] / sum : 1.0 / double(dominance.size()); }
+};
+
+/// The patterns' field dominance at x [m]; Pattern::info.magnet indexes `magnets`.
+Dominance patternDominance(const std::vector<Pattern>& patterns, const std::vector<Magnet>& magnets, const Vec3d& x);
+
 /// The wetted wall on the refined surface: never displaced, and heights fade in away from it.
 struct WettedWall {
     std::vector<char> wetted; ///< per vertex of the refined mesh: 1 = wetted wall

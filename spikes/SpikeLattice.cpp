@@ -224,17 +224,9 @@ void settleSeams(std::vector<Pattern>& patterns, const std::vector<Magnet>& magn
     if (patterns.size() < 2) return;
     // Each tip's share of the field dominance at its own position.
     std::vector<std::vector<double>> share(patterns.size());
-    for (size_t p = 0; p < patterns.size(); ++p) {
-        for (const Tip& tip : patterns[p].tips) {
-            double own = 0, all = 0;
-            for (size_t q = 0; q < patterns.size(); ++q) {
-                const double d = fieldDominance(magnetField(magnets[size_t(patterns[q].info.magnet)], tip.position));
-                all += d;
-                if (q == p) own = d;
-            }
-            share[p].push_back(all > 0 ? own / all : 1.0 / double(patterns.size()));
-        }
-    }
+    for (size_t p = 0; p < patterns.size(); ++p)
+        for (const Tip& tip : patterns[p].tips)
+            share[p].push_back(patternDominance(patterns, magnets, tip.position).share(p));
     // A tip's ownership starts from its pattern's share: smoothstep((share - 0.2) / 0.2), so
     // a pattern's lattice where another magnet dominates (share under 0.2) leaves nothing.
     // Then every pair of tips of two patterns closer than 0.6 l merges by

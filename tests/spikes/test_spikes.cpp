@@ -39,6 +39,16 @@ std::string sceneText(double R, const std::string& extra)
     return s.str();
 }
 
+// Two upright dipoles of `moment` [A m^2] at (x1, 0, z1) and (x2, 0, z2) [m].
+std::string dipolePair(double x1, double z1, double x2, double z2, double moment)
+{
+    std::ostringstream s;
+    for (const auto& [x, z] : {std::make_pair(x1, z1), std::make_pair(x2, z2)})
+        s << "[[magnets]]\nkind = \"dipole\"\nposition = [" << x << ", 0.0, " << z
+          << "]\ndirection = [0.0, 0.0, 1.0]\nmoment = " << moment << "\n";
+    return s.str();
+}
+
 std::string uniformField(double H)
 {
     std::ostringstream s;
@@ -314,11 +324,7 @@ TEST_CASE("temporal stability: a still magnet keeps the tips in place", "[spikes
 TEST_CASE("two magnets: each makes a pattern, tips lean along the field lines", "[spikes][two-magnets]")
 {
     const double R = 0.045;
-    const std::string magnets =
-        "[[magnets]]\nkind = \"dipole\"\nposition = [-0.02, 0.0, -0.02]\ndirection = [0.0, 0.0, 1.0]\n"
-        "moment = 1.5\n"
-        "[[magnets]]\nkind = \"dipole\"\nposition = [0.025, 0.0, -0.025]\ndirection = [0.0, 0.0, 1.0]\n"
-        "moment = 1.5\n";
+    const std::string magnets = dipolePair(-0.02, -0.02, 0.025, -0.025, 1.5);
     const SpikeScene sc = scene(sceneText(R, magnets), {"spikes.resolution=24"});
     const SpikeResult res = addSpikes(frameInput(sc, makeFlatPool(R, kDepth, 30)), sc.params);
     REQUIRE(res.patterns.size() == 2);
@@ -360,11 +366,7 @@ TEST_CASE("two magnets brought together: the patterns meet without overlapping o
           "[spikes][two-magnets]")
 {
     const double R = 0.045;
-    const std::string magnets =
-        "[[magnets]]\nkind = \"dipole\"\nposition = [-0.012, 0.0, -0.02]\ndirection = [0.0, 0.0, 1.0]\n"
-        "moment = 1.5\n"
-        "[[magnets]]\nkind = \"dipole\"\nposition = [0.012, 0.0, -0.02]\ndirection = [0.0, 0.0, 1.0]\n"
-        "moment = 1.5\n";
+    const std::string magnets = dipolePair(-0.012, -0.02, 0.012, -0.02, 1.5);
     const SpikeScene sc = scene(sceneText(R, magnets), {"spikes.resolution=24"});
     const SpikeResult res = addSpikes(frameInput(sc, makeFlatPool(R, kDepth, 30)), sc.params);
     REQUIRE(res.patterns.size() == 2);
