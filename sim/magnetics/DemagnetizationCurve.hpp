@@ -24,7 +24,7 @@
 // largest h of the solve, constant beyond them. Least squares of two kinds of rows: each
 // particle's M along the applied field against r(h) M_law(h), and, given surface samples,
 // the potential G(h_s) = integral_0^h_s r M_law dh against the ferrohydrostatic surface
-// pressure F(H) + M_n^2 / 2 of the solve's free-surface particles, up to a free constant. In
+// pressure F(H) + M_n^2 / 2 of the solve's surface samples, up to a free constant. In
 // an incompressible fluid a potential body force only shifts the pressure, so what shapes the
 // free surface is G along it; matching G to the surface pressure makes a resting surface the
 // ferrohydrostatic one (measured: 14-17 % of the centre rise off the law on 2,560-particle
