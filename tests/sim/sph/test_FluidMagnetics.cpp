@@ -148,8 +148,14 @@ std::vector<double> leastSquares(const std::vector<std::vector<double>>& rows, c
     for (size_t i = 0; i < m; ++i) out[i] = a[i][m] / a[i][i];
     return out;
 }
-BernoulliCheck bernoulliCheck(const FluidSimulation& sim, double wallRadius) {
-    const double s = sim.spacing(), rho0 = sim.restDensity(), g = sim.scene().solver.gravity.norm();
+/// One look at the surface: per ring, the mean radius, height z_s of the column tops, and
+/// the magnetic side's two terms mu0 F(H) and mu0 M_n^2 / 2 [Pa] (see BernoulliCheck).
+struct RingProfile {
+    std::vector<double> r, z, pressure, traction;
+};
+
+RingProfile ringProfile(const FluidSimulation& sim, double wallRadius) {
+    const double s = sim.spacing();
     const double chi0 = sim.scene().magnetization.susceptibility, Msat = sim.scene().magnetization.saturation;
     const std::vector<Vec3>& x = sim.positions();
     const std::vector<Vec3>& H = sim.magnetics()->field();
@@ -169,22 +175,60 @@ BernoulliCheck bernoulliCheck(const FluidSimulation& sim, double wallRadius) {
     }
     std::vector<std::vector<size_t>> tops(static_cast<size_t>(rings));
     for (const auto& [key, i] : top) tops[size_t(key.first)].push_back(i);
-    std::vector<double> zs(size_t(rings), 0.0), rs(size_t(rings), 0.0);
+    RingProfile out;
+    out.r.assign(size_t(rings), 0.0);
+    out.z.assign(size_t(rings), 0.0);
     for (int k = 0; k < rings; ++k) {
         REQUIRE(!tops[size_t(k)].empty());
         for (size_t i : tops[size_t(k)]) {
-            zs[size_t(k)] += double(x[i].z()) / double(tops[size_t(k)].size());
-            rs[size_t(k)] += std::hypot(double(x[i].x()), double(x[i].y())) / double(tops[size_t(k)].size());
+            out.z[size_t(k)] += double(x[i].z()) / double(tops[size_t(k)].size());
+            out.r[size_t(k)] += std::hypot(double(x[i].x()), double(x[i].y())) / double(tops[size_t(k)].size());
+        }
+    }
+    for (int k = 0; k < rings; ++k) {
+        const int lo = std::max(k - 1, 0), hi = std::min(k + 1, rings - 1);
+        const double slope = (out.z[size_t(hi)] - out.z[size_t(lo)]) / (double(hi - lo) * s);
+        double h = 0, mn = 0;
+        for (size_t i : tops[size_t(k)]) {
+            const Vec2d radial = Vec2d(x[i].x(), x[i].y()).normalized();
+            const Vec3d n = Vec3d(-slope * radial.x(), -slope * radial.y(), 1).normalized();
+            h += H[i].cast<double>().norm() / double(tops[size_t(k)].size());
+            mn += M[i].cast<double>().dot(n) / double(tops[size_t(k)].size());
+        }
+        out.pressure.push_back(kMu0 * langevinEnergy(h, chi0, Msat));
+        out.traction.push_back(kMu0 * 0.5 * mn * mn);
+    }
+    return out;
+}
+
+/// The law on the mean of several looks at a resting surface (each ring's values averaged
+/// over the looks): a ring's column tops are a handful of particles, and in a pool at rest
+/// (0.5 mm/s RMS) which particle tops a column changes from look to look, by up to a
+/// quarter spacing (on the 2,560-particle pool the worst deviation of single looks 0.25 s
+/// apart ranged over 9-34 % of the rise while the rise held at 32-33 Pa).
+BernoulliCheck bernoulliCheck(const std::vector<RingProfile>& looks, const FluidSimulation& sim) {
+    REQUIRE(!looks.empty());
+    const double s = sim.spacing(), rho0 = sim.restDensity(), g = sim.scene().solver.gravity.norm();
+    const size_t rings = looks.front().z.size();
+    RingProfile mean;
+    for (std::vector<double>* v : {&mean.r, &mean.z, &mean.pressure, &mean.traction}) v->assign(rings, 0.0);
+    for (const RingProfile& look : looks) {
+        REQUIRE(look.z.size() == rings);
+        for (size_t k = 0; k < rings; ++k) {
+            mean.r[k] += look.r[k] / double(looks.size());
+            mean.z[k] += look.z[k] / double(looks.size());
+            mean.pressure[k] += look.pressure[k] / double(looks.size());
+            mean.traction[k] += look.traction[k] / double(looks.size());
         }
     }
     // Capillary pressure sigma div n of the axisymmetric profile z(r), n = (-z' e_r, 1) / sqrt(1 + z'^2):
     // div n = -(1/r) d/dr (r z' / sqrt(1 + z'^2)), by central differences of the fitted profile.
     std::vector<std::vector<double>> basis;
-    for (int k = 0; k < rings; ++k) {
-        const double u = rs[size_t(k)] * rs[size_t(k)];
+    for (size_t k = 0; k < rings; ++k) {
+        const double u = mean.r[k] * mean.r[k];
         basis.push_back({1.0, u, u * u, u * u * u});
     }
-    const std::vector<double> a = leastSquares(basis, zs);
+    const std::vector<double> a = leastSquares(basis, mean.z);
     const auto slopeAt = [&](double r) {
         const double u = r * r;
         return 2 * r * (a[1] + 2 * a[2] * u + 3 * a[3] * u * u);
@@ -202,36 +246,39 @@ BernoulliCheck bernoulliCheck(const FluidSimulation& sim, double wallRadius) {
     std::vector<double> withCapillary;
     std::vector<double> residual;
     BernoulliCheck out;
-    for (int k = 0; k < rings; ++k) {
-        const int lo = std::max(k - 1, 0), hi = std::min(k + 1, rings - 1);
-        const double slope = (zs[size_t(hi)] - zs[size_t(lo)]) / (double(hi - lo) * s);
-        double h = 0, mn = 0;
-        for (size_t i : tops[size_t(k)]) {
-            const Vec2d radial = Vec2d(x[i].x(), x[i].y()).normalized();
-            const Vec3d n = Vec3d(-slope * radial.x(), -slope * radial.y(), 1).normalized();
-            h += H[i].cast<double>().norm() / double(tops[size_t(k)].size());
-            mn += M[i].cast<double>().dot(n) / double(tops[size_t(k)].size());
-        }
-        const double pressure = kMu0 * langevinEnergy(h, chi0, Msat), traction = kMu0 * 0.5 * mn * mn;
-        if (k == 0) {
-            out.pressure = pressure;
-            out.traction = traction;
-        }
-        residual.push_back(rho0 * g * zs[size_t(k)] - pressure - traction);
-        const double capillary = sigma * divNormal(rs[size_t(k)]);
-        if (k == 0) out.capillary = capillary;
-        withCapillary.push_back(residual.back() + capillary);
+    out.pressure = mean.pressure.front();
+    out.traction = mean.traction.front();
+    out.capillary = sigma * divNormal(mean.r.front());
+    for (size_t k = 0; k < rings; ++k) {
+        residual.push_back(rho0 * g * mean.z[k] - mean.pressure[k] - mean.traction[k]);
+        withCapillary.push_back(residual.back() + sigma * divNormal(mean.r[k]));
     }
     const auto worstDeviation = [](const std::vector<double>& v) {
-        double mean = 0, worst = 0;
-        for (double r : v) mean += r / double(v.size());
-        for (double r : v) worst = std::max(worst, std::abs(r - mean));
+        double avg = 0, worst = 0;
+        for (double r : v) avg += r / double(v.size());
+        for (double r : v) worst = std::max(worst, std::abs(r - avg));
         return worst;
     };
     out.worst = worstDeviation(residual);
     out.worstCapillary = worstDeviation(withCapillary);
-    out.rise = rho0 * g * (zs.front() - zs.back());
+    out.rise = rho0 * g * (mean.z.front() - mean.z.back());
     return out;
+}
+
+BernoulliCheck bernoulliCheck(const FluidSimulation& sim, double wallRadius) {
+    return bernoulliCheck(std::vector<RingProfile>{ringProfile(sim, wallRadius)}, sim);
+}
+
+/// Advances a resting pool by `span` [s], looking at its surface every `every` [s] (the
+/// first look now): the law on the mean of the looks.
+BernoulliCheck bernoulliCheckOverTime(FluidSimulation& sim, double wallRadius, double span = 0.5, double every = 0.05) {
+    std::vector<RingProfile> looks{ringProfile(sim, wallRadius)};
+    const double start = sim.time();
+    for (int k = 1; k * every <= span + 1e-9; ++k) {
+        sim.advanceTo(start + k * every);
+        looks.push_back(ringProfile(sim, wallRadius));
+    }
+    return bernoulliCheck(looks, sim);
 }
 
 /// RMS particle speed [m/s].
@@ -633,11 +680,12 @@ TEST_CASE("a pool over a magnet held still comes to rest in ferrohydrostatic bal
         // Before the body force's M became a function of |H_magnets| (DemagnetizationCurve),
         // this pool never rested (2.7 mm/s RMS, a convection roll) and a smaller pool's surface
         // was off the law by 40-70 % of the centre rise. Measured now (this pool, 2 s): RMS
-        // speed 0.42-0.49 mm/s; worst deviation from the law 17 % (chi0 0.5), 14 % (1.5,
-        // DFSPH), 15 % (1.5, WCSPH) of the centre rise (with the curve fitted to the volume
-        // alone 15-24 %, a smooth trend from the axis outward). The issue's 10 % is not
-        // reached; ring-to-ring noise of the column tops is ~0.2 spacing, ~10 % of this rise.
-        const BernoulliCheck law = bernoulliCheck(sim, 0.025);
+        // speed 0.42-0.49 mm/s; worst deviation from the law, on the mean of 11 looks over
+        // the next 0.5 s, 11.9 % (chi0 0.5), 11.4 % (1.5, DFSPH), 16.2 % (1.5, WCSPH) of the
+        // centre rise (a single look at 2 s: 16.8, 14.3, 14.6 %; with the curve fitted to the
+        // volume alone 15-24 %). The issue's 10 % is not reached here: the column tops of
+        // this coarse pool step by ~0.2 spacing ring to ring, ~10 % of its rise.
+        const BernoulliCheck law = bernoulliCheckOverTime(sim, 0.025);
         WARN("Bernoulli along the surface (" << c.solver << ", chi0 " << c.susceptibility << "): centre rise "
              << law.rise << " Pa, worst deviation " << law.worst << " Pa, with the capillary term "
              << law.worstCapillary << " Pa; on the axis mu0 F = " << law.pressure << " Pa, mu0 Mn^2/2 = "
@@ -656,7 +704,7 @@ TEST_CASE("the suite pool's Bernoulli deviation with and without surface tension
     const double sigma = GENERATE(0.0, 0.025);
     FluidSimulation sim(loadExample("ferrohydrostatic_pool.toml", {"fluid.surface_tension=" + std::to_string(sigma)}));
     const double rms = settleForTwoSeconds(sim);
-    const BernoulliCheck law = bernoulliCheck(sim, 0.025);
+    const BernoulliCheck law = bernoulliCheck(sim, 0.025);   // one look, as measured above
     WARN("Bernoulli, 2,560 particles, chi0 1.5, sigma " << sigma << ": centre rise " << law.rise
          << " Pa, worst deviation " << law.worst << " Pa (" << 100 * law.worst / law.rise
          << " %), with the capillary term " << law.worstCapillary << " Pa (" << 100 * law.worstCapillary / law.rise
@@ -667,10 +715,13 @@ TEST_CASE("the suite pool's Bernoulli deviation with and without surface tension
 // The same pool and law at four times the particles (10,240, spacing 1.6x finer), the
 // resolution the suite cannot afford (3-5 CPU minutes a case): hidden, run by hand with
 //     build/bin/ferro_sph_tests "[bernoulli-fine]"
-// Measured (2026-12-02): chi0 0.5 worst deviation 2.7 % of the centre rise (36 Pa), chi0 1.5
-// 18.4 % (rise 51 Pa, the traction term mu0 Mn^2/2 = 52 Pa on the axis against mu0 F = 37 Pa).
-// The issue's 10 % holds at chi0 0.5 and is asserted there; at 1.5 the finer pool is no
-// closer than the suite's (14 % at 2,560), so the bound stays the suite's 25 %.
+// Measured (2026-12-02, mean of 11 looks over 2.0-2.5 s): chi0 0.5 worst deviation 3.1 % of
+// the centre rise (36 Pa; one look at 2 s: 2.7 %), chi0 1.5 17.8 % (18.4 %; rise 51 Pa, the
+// traction term mu0 Mn^2/2 = 52 Pa on the axis against mu0 F = 37 Pa). The issue's 10 % holds
+// at chi0 0.5 and is asserted there; at 1.5 the finer pool is no closer than the suite's, so
+// the bound stays the suite's 25 %. The cause at 1.5 is the curve's surface samples (the
+// floor and walls at rest, not the free surface: sim/sph/FluidMagnetics.cpp); fitted to the
+// free surface the same pool measured 7.3 % at 1.5 but 12.0 % at 0.5 (README, magnetics).
 TEST_CASE("a finer pool over a still magnet: the Bernoulli law within 10 % at chi0 0.5, 25 % at 1.5",
           "[.][bernoulli-fine][magnetics][slow]") {
     const double chi0 = GENERATE(0.5, 1.5);
@@ -678,7 +729,7 @@ TEST_CASE("a finer pool over a still magnet: the Bernoulli law within 10 % at ch
                                     {"fluid.block.0.count=10240", "magnetization.susceptibility=" + std::to_string(chi0)}));
     const double rms = settleForTwoSeconds(sim);
     REQUIRE(allFinite(sim));
-    const BernoulliCheck law = bernoulliCheck(sim, 0.025);
+    const BernoulliCheck law = bernoulliCheckOverTime(sim, 0.025);
     WARN("Bernoulli, 10,240 particles, chi0 " << chi0 << ": centre rise " << law.rise << " Pa, worst deviation "
          << law.worst << " Pa (" << 100 * law.worst / law.rise << " %), with the capillary term " << law.worstCapillary
          << " Pa (" << 100 * law.worstCapillary / law.rise << " %); on the axis mu0 F = " << law.pressure
