@@ -27,9 +27,11 @@
 // pressure F(H) + M_n^2 / 2 of the solve's surface samples, up to a free constant. In
 // an incompressible fluid a potential body force only shifts the pressure, so what shapes the
 // free surface is G along it; matching G to the surface pressure makes a resting surface the
-// ferrohydrostatic one (measured: 14-17 % of the centre rise off the law on 2,560-particle
-// pools, against 15-24 % with the volume rows alone; the volume rows still decide the field
-// strengths the surface does not reach). Nodes without data are linear between fitted ones.
+// ferrohydrostatic one, if the samples are the free surface (the volume rows still decide
+// the field strengths the surface does not reach). What the simulation passes at rest is the
+// floor and the walls instead, and resting pools miss the law by 13 % of the centre rise at
+// chi0 0.5 and 39-44 % at 1.5 (sim/sph/FluidMagnetics.cpp, tests/sim/sph/
+// test_FluidMagnetics.cpp). Nodes without data are linear between fitted ones.
 // Deterministic (sequential sums in the given order).
 #include <vector>
 

@@ -174,12 +174,14 @@ void FluidMagnetics::solve(const std::vector<Vec3>& x, bool forced) {
         // not the free surface. The dipole kernel (2.5 spacings) is 35 % empty at a floor
         // particle but only 7 % under the top layer (it reaches half a spacing past the
         // particles), under the 0.2 threshold; 0 of ~490 samples lie on the free surface at
-        // rest, and the law holds within 2.7 % (chi0 0.5) but 18 % (1.5) at 10,240 particles.
-        // Free-surface samples (the surface model's colour gradient and exposure, the
-        // applied field half a spacing out) fit the law within 1 Pa there and give 7-21 % at
-        // chi0 1.5 (by how successive fits are blended), and on the suite's 2,560-particle
-        // pool the fit's feedback through M_n went erratic (7-75 %) and WCSPH rested only
-        // after 2.5 s: README, magnetics.
+        // rest, and the law holds within 10 % (chi0 0.5) but 34 % (1.5) of the heap's rise at
+        // 10,240 particles, the heap too tall where the traction dominates. Free-surface
+        // samples (the surface model's colour gradient and exposure, the applied field and
+        // F + M_n^2 / 2 half a spacing out, where the fluid ends) did not do better yet on the
+        // suite's 2,560-particle pool: 74 % at chi0 0.5 (a crater on the axis), 26 % at 1.5,
+        // and at 1.5 the surface rippled into rings (the heap's top is at the threshold of
+        // the normal-field instability there, and such a fit lets the traction follow the
+        // shape): README, magnetics.
         std::vector<DemagnetizationCurve::SurfaceSample> surface;
         const std::vector<Real>& w = solver_->surfaceWeight();
         const std::vector<Vec3>& normal = solver_->surfaceNormal();
