@@ -35,7 +35,8 @@ struct MagnetizationParams {
     /// OFF by default, for the simulation: on the resting pool of
     /// tests/sim/sph/test_FluidMagnetics.cpp (2 s, examples/ferrohydrostatic_pool.toml) it
     /// brought the Bernoulli deviation at chi0 = 1.5 (DFSPH, then measured at the top
-    /// particles' centres) from 14 % to 12 % of the centre rise, but the pool came less to rest: RMS speed 0.49 -> 0.61 mm/s (chi0 0.5, DFSPH),
+    /// particles' centres) from 14 % to 12 % of the centre rise, but the pool came less to
+    /// rest: RMS speed 0.49 -> 0.61 mm/s (chi0 0.5, DFSPH),
     /// 0.42 -> 0.54 (1.5, DFSPH), 0.46 -> 1.00 mm/s (1.5, WCSPH: over the 1 mm/s of the
     /// test). Off is exactly the model before it (surface term from any deficit).
     bool localCorrection = false;

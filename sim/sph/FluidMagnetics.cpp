@@ -178,10 +178,10 @@ void FluidMagnetics::solve(const std::vector<Vec3>& x, bool forced) {
         // 10,240 particles, the heap too tall where the traction dominates. Free-surface
         // samples (the surface model's colour gradient and exposure, the applied field and
         // F + M_n^2 / 2 half a spacing out, where the fluid ends) did not do better yet on the
-        // suite's 2,560-particle pool: 74 % at chi0 0.5 (a crater on the axis), 26 % at 1.5,
-        // and at 1.5 the surface rippled into rings (the heap's top is at the threshold of
-        // the normal-field instability there, and such a fit lets the traction follow the
-        // shape): README, magnetics.
+        // suite's 2,560-particle pool: 74 % at chi0 0.5 (a crater on the axis), 26 % at 1.5;
+        // weighted to dominate the volume rows, 17.5 % and 62 %, the surface at 1.5 rippling
+        // into rings (the heap's top is at the threshold of the normal-field instability
+        // there, and such a fit lets the traction follow the shape): README, magnetics.
         std::vector<DemagnetizationCurve::SurfaceSample> surface;
         const std::vector<Real>& w = solver_->surfaceWeight();
         const std::vector<Vec3>& normal = solver_->surfaceNormal();
