@@ -44,6 +44,14 @@ double surfaceHeight(const std::vector<Vec3>& x, double cx, double cy, double r0
     return z[size_t(0.98 * double(z.size() - 1))];
 }
 
+/// The field just inside the free surface a particle at xi stands for, at xs (half a spacing
+/// out from its centre): the magnets' field there, analytic, plus the particle's own induced
+/// field Hi - H_magnets(xi) as the simulation reports it (it changes little over half a
+/// spacing; ringProfile says how little). Both surface rulers below read the field here.
+Vec3d fieldAtSurface(const std::vector<Magnet>& magnets, const Vec3d& xi, const Vec3d& Hi, const Vec3d& xs) {
+    return magnetField(magnets, xs) + (Hi - magnetField(magnets, xi));
+}
+
 /// The ferrohydrostatic balance along the free surface of a fluid at rest. With pressure
 /// zero on the surface, the tangential part of rho g + f must vanish there, so between two
 /// surface points g (z_a - z_b) = integral_b^a f / rho0 . dl. The surface is sampled in bins
@@ -87,7 +95,7 @@ SurfaceBalance surfaceBalance(const FluidSimulation& sim, const Vec2d& from, con
             // the pressure grows with the pull (5-10 g over a strong magnet).
             const Vec3d xi = x[bin[k]].cast<double>();
             const Vec3d xs = xi + Vec3d(0, 0, 0.5 * s);
-            const Vec3d Hs = magnetField(magnets, xs) + (H[bin[k]].cast<double>() - magnetField(magnets, xi));
+            const Vec3d Hs = fieldAtSurface(magnets, xi, H[bin[k]].cast<double>(), xs);
             const Vec3d Ms = langevinMagnetization(Hs.norm(), chi0, Msat) * Hs.normalized();
             p += xs / double(top);
             f += kMu0 / rho0 * (fieldGradient(magnets, xs) * Ms) / double(top);
@@ -190,12 +198,10 @@ RingProfile ringProfile(const FluidSimulation& sim, double wallRadius) {
     // just inside the surface, not at the centres: F + M_n^2 / 2 grows with depth by ~100 Pa
     // per spacing on the axis and ~30 at the outermost ring (chi0 1.5; the applied field's
     // gradient, 2e6 A/m^2 on the axis), against a rise of ~40 Pa, so a ruler at the centres
-    // can be off by as much as the rise. The
-    // applied field is evaluated at the surface point (analytic), the fluid's own (induced)
-    // field is the particle's from the file, and M is the Langevin law of the sum, as the
-    // file's M is of the file's H. The induced field changes little near the top (a flat
-    // layer over this dipole solved at 1 and 2 mm spacing: 2-5 % per spacing, against 20 %
-    // for the applied field); taking it constant over the half spacing puts F on the axis
+    // can be off by as much as the rise. The field there is fieldAtSurface's, and M is the
+    // Langevin law of it, as the file's M is of the file's H. The induced field changes
+    // little near the top (a flat layer over this dipole solved at 1 and 2 mm spacing: 2-5 %
+    // per spacing, against 20 % for the applied field); taking it constant over the half spacing puts F on the axis
     // at most ~3 Pa low on this pool, ~10 % of its rise, in the direction that makes the
     // heap look too tall.
     RingProfile out;
@@ -211,7 +217,7 @@ RingProfile ringProfile(const FluidSimulation& sim, double wallRadius) {
             const Vec2d radial = Vec2d(x[i].x(), x[i].y()).normalized();
             const Vec3d n = Vec3d(-slope * radial.x(), -slope * radial.y(), 1).normalized();
             const Vec3d xi = x[i].cast<double>(), xs = xi + 0.5 * s * n;
-            const Vec3d Hs = magnetField(magnets, xs) + (H[i].cast<double>() - magnetField(magnets, xi));
+            const Vec3d Hs = fieldAtSurface(magnets, xi, H[i].cast<double>(), xs);
             const double h = Hs.norm(), mn = h > 0 ? langevinMagnetization(h, chi0, Msat) * Hs.dot(n) / h : 0.0;
             out.r[size_t(k)] += std::hypot(xs.x(), xs.y()) / count;
             out.z[size_t(k)] += xs.z() / count;
