@@ -32,13 +32,20 @@ struct MagnetizationParams {
     /// Measured on a ball jittered by 0.2 spacings at chi0 = 10: 11.5 % RMS field error per
     /// particle without it, 2.2 % with it; on a ball cut from a settled SPH tank 0.93 -> 0.86 %.
     /// With it the surface term also sets in smoothly (deficits 0.05-0.15, DipoleTree.hpp).
-    /// OFF by default, for the simulation: on the resting pool of
-    /// tests/sim/sph/test_FluidMagnetics.cpp (2 s, examples/ferrohydrostatic_pool.toml) it
-    /// brought the Bernoulli deviation at chi0 = 1.5 (DFSPH, then measured at the top
-    /// particles' centres) from 14 % to 12 % of the centre rise, but the pool came less to
-    /// rest: RMS speed 0.49 -> 0.61 mm/s (chi0 0.5, DFSPH),
-    /// 0.42 -> 0.54 (1.5, DFSPH), 0.46 -> 1.00 mm/s (1.5, WCSPH: over the 1 mm/s of the
-    /// test). Off is exactly the model before it (surface term from any deficit).
+    /// OFF by default: what it removes is the scatter of artificially jittered particles, not
+    /// of settled SPH states. Measured 2026-12-02 (ferro_magnetics_tests "[.figures]", direct):
+    /// on a ball cut from a settled SPH tank the uncorrected field is already within 0.14-0.93 %
+    /// RMS, worst particle 0.5-2.6 %, for chi0 0.5-10 (corrected 0.11-0.86 %, 0.4-2.9 %); only
+    /// the 0.2-spacing jittered ball needs it (uncorrected 1.5-11.5 % RMS). Its cost
+    /// (bench-magnetization --threads 1 --sizes 40960 --local-correction true|false): a cold
+    /// tree solve 2.6 s instead of 1.7 s, a warm one 2.2 s instead of 0.75 s, and the tree's
+    /// lead over the direct solve 15x instead of ~20x. On the resting pool of
+    /// tests/sim/sph/test_FluidMagnetics.cpp (2 s, examples/ferrohydrostatic_pool.toml; each
+    /// curve fit blended into the last at 0.2, without which it did not rest under WCSPH) the
+    /// Bernoulli deviation was 13.3 / 43.7 / 35.6 % of the centre rise (chi0 0.5 DFSPH, 1.5
+    /// DFSPH, 1.5 WCSPH) against 13.1 / 38.8 / 43.5 % without it, RMS speed 0.55 / 0.76 /
+    /// 0.62 mm/s against 0.42-0.49. Off is exactly the model before it (surface term from any
+    /// deficit).
     bool localCorrection = false;
     /// How the magnetic force enters the fluid (sim/sph/FluidMagnetics.hpp has the
     /// derivation):
