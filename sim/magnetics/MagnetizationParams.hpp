@@ -37,9 +37,10 @@ struct MagnetizationParams {
     /// on a ball cut from a settled SPH tank the uncorrected field is already within 0.14-0.93 %
     /// RMS, worst particle 0.5-2.6 %, for chi0 0.5-10 (corrected 0.11-0.86 %, 0.4-2.9 %); only
     /// the 0.2-spacing jittered ball needs it (uncorrected 1.5-11.5 % RMS). Its cost
-    /// (bench-magnetization --threads 1 --sizes 40960 --local-correction true|false): a cold
-    /// tree solve 2.6 s instead of 1.7 s, a warm one 2.2 s instead of 0.75 s, and the tree's
-    /// lead over the direct solve 15x instead of ~20x. On the resting pool of
+    /// (bench-magnetization --threads 1 --sizes 40960 --direct-max 40960 --local-correction
+    /// true|false, two runs each): a cold tree solve 2.6-3.6 s instead of 1.4-1.6 s, a warm
+    /// one 2.2-2.7 s instead of 0.73-0.75 s, and the tree's lead over the direct solve (which
+    /// the correction also makes dearer, 40-44 s against 36 s) 12-15x instead of 20-22x. On the resting pool of
     /// tests/sim/sph/test_FluidMagnetics.cpp (2 s, examples/ferrohydrostatic_pool.toml; each
     /// curve fit blended into the last at 0.2, without which it did not rest under WCSPH) the
     /// Bernoulli deviation was 13.3 / 43.7 / 35.6 % of the centre rise (chi0 0.5 DFSPH, 1.5
