@@ -77,8 +77,11 @@ MagnetizationParams parseMagnetization(const SceneDocument& doc)
              : solver == "tree" ? MagnetizationParams::Solver::Tree : MagnetizationParams::Solver::Auto;
     p.tolerance = r.positive("tolerance", p.tolerance);
     p.openingAngle = r.number("opening_angle", p.openingAngle);
-    if (!(p.openingAngle > 0 && p.openingAngle < 1.5))
-        r.fail("opening_angle", "must be in (0, 1.5) (got " + formatNumber(p.openingAngle) + ")");
+    // The tree works in [0.05, 1] (DipoleTree::build): above 1 a target may lie inside an
+    // accepted cell's box, where its expansion is no field at all; below 0.05 it is the
+    // direct sum at a tree's overhead.
+    if (!(p.openingAngle >= 0.05 && p.openingAngle <= 1))
+        r.fail("opening_angle", "must be in [0.05, 1] (got " + formatNumber(p.openingAngle) + ")");
     p.smoothing = r.number("smoothing", p.smoothing);
     if (!(p.smoothing == 0 || (p.smoothing >= 1 && p.smoothing <= 6)))
         r.fail("smoothing", "must be 0 (uniformly magnetized spheres) or in [1, 6] particle spacings (got " +

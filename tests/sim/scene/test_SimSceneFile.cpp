@@ -614,6 +614,16 @@ TEST_CASE("examples/annotated.toml parses", "[scene]")
     CHECK(s.solver.maxIterations == defaults.solver.maxIterations);
 }
 
+TEST_CASE("magnetization.opening_angle is refused outside the tree's working range [0.05, 1]", "[scene]")
+{
+    // The tree clamped 1.2 to 1 without a word (a bench report's "theta 1.2" rows were 1.0).
+    CHECK(scene(kMinimal + "[magnetization]\nopening_angle = 1\n").magnetization.openingAngle == 1.0);
+    CHECK(scene(kMinimal + "[magnetization]\nopening_angle = 0.05\n").magnetization.openingAngle == 0.05);
+    for (const char* bad : {"1.2", "0.01", "0", "-0.5"})
+        CHECK_THAT(sceneError(kMinimal + "[magnetization]\nopening_angle = " + bad + "\n"),
+                   Contains("magnetization.opening_angle: must be in [0.05, 1]"));
+}
+
 TEST_CASE("magnetization.smoothing selects the particle model", "[scene]")
 {
     CHECK(scene(kMinimal).magnetization.smoothing == 2.5); // smoothed dipoles by default
