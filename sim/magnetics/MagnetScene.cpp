@@ -77,9 +77,10 @@ MagnetizationParams parseMagnetization(const SceneDocument& doc)
              : solver == "tree" ? MagnetizationParams::Solver::Tree : MagnetizationParams::Solver::Auto;
     p.tolerance = r.positive("tolerance", p.tolerance);
     p.openingAngle = r.number("opening_angle", p.openingAngle);
-    // The tree works in [0.05, 1] (DipoleTree::build): above 1 a target may lie inside an
-    // accepted cell's box, where its expansion is no field at all; below 0.05 it is the
-    // direct sum at a tree's overhead.
+    // The tree clamps the angle to [0.05, 1] (DipoleTree::build); a value outside used to be
+    // changed without a word. Above 1 cells as large as their distance would be expanded
+    // (1.0 already gives 0.3 % RMS field error on a settled pool, tests/bench/report); below
+    // 0.05 it is the direct sum at a tree's overhead.
     if (!(p.openingAngle >= 0.05 && p.openingAngle <= 1))
         r.fail("opening_angle", "must be in [0.05, 1] (got " + formatNumber(p.openingAngle) + ")");
     p.smoothing = r.number("smoothing", p.smoothing);
