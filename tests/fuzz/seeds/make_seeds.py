@@ -51,7 +51,7 @@ put("scene", "types.toml", "shot = 1\n[fluid]\nblock = 3\n[sim]\nmax_iterations 
 put("scene", "cylinder.toml", "[fluid]\nspacing = 0.001\n[[fluid.block]]\nshape = \"cylinder\"\n"
     "center = [0, 0, 0]\nradius = 0.01\nheight = 0.01\nvelocity = [0, 0, 1]\n"
     "[container]\ntype = \"box\"\nmin = [-1, -1, -1]\nmax = [1, 1, 1]\nclosed_top = true\n"
-    "[magnetization]\nsusceptibility = 1\nsolver = \"tree\"\nopening_angle = 1.4\n")
+    "[magnetization]\nsusceptibility = 1\nsolver = \"tree\"\nopening_angle = 0.9\n")
 
 # --- PLY helpers ---------------------------------------------------------------------------
 fmt = {"char": "b", "uchar": "B", "short": "h", "ushort": "H", "int": "i", "uint": "I",
