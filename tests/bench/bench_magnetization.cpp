@@ -25,9 +25,9 @@
 // For each solver: wall ms per solve (the fastest of --repeats cold solves, default 3: the
 // same solve was measured up to 30 % apart within one run on a shared machine), field
 // evaluations (particle-field products) per solve, ms per evaluation, and the relative RMS
-// error of H and M against the direct solution. Above --direct-max particles the direct solve is not run: its cost is estimated
-// as (all-pairs evaluation time measured on 2,048 random target particles) x N / 2,048 x
-// (the tree solve's evaluation count), and the tree's error is measured on those 2,048
+// error of H and M against the direct solution. Above --direct-max particles the direct
+// solve is not run: its cost is estimated as (all-pairs evaluation time measured on 2,048
+// random target particles) x N / 2,048 x (the tree solve's evaluation count), and the tree's error is measured on those 2,048
 // targets as |H_tree - (H_ext + exact particle field of the tree's M)| (the tree's
 // approximation error at its own solution, plus its residual), not against a direct solve.
 #include "sim/magnetics/MagnetizationSolver.hpp"
@@ -39,7 +39,7 @@
 
 #include <CLI/CLI.hpp>
 
-#include <tbb/global_control.h>
+#include <tbb/task_arena.h>
 
 #include <algorithm>
 #include <chrono>
@@ -163,48 +163,7 @@ double fastestOf(int repeats, F timed) {
     return best;
 }
 
-} // namespace
-
-/// The synthetic layer's table (the default run); defined below main.
-int layerBench(int threads, double theta, double tolerance, double smoothing, bool localCorrection,
-               size_t directMax, int repeats, const std::vector<size_t>& sizes);
-
-int main(int argc, char** argv) {
-    int threads = 2;
-    double theta = 0.5, tolerance = 0.01, smoothing = MagnetizationParams{}.smoothing;
-    size_t directMax = 40960;
-    std::vector<size_t> sizes{10240, 40960, 163840};
-    std::string particleFile;
-    std::vector<double> thetas{0.3, 0.5, 0.8, 1.0};
-    bool localCorrection = MagnetizationParams{}.localCorrection;
-    int repeats = 3;
-    CLI::App app{"bench-magnetization: cost and accuracy of the magnetization solvers on a ferrofluid layer over "
-                 "a dipole (or on the particles of a ferro-sim file)"};
-    app.add_option("--threads", threads, "worker threads")->check(CLI::PositiveNumber);
-    app.add_option("--theta", theta, "the tree's opening angle")->check(CLI::Range(0.05, 1.0));
-    app.add_option("--tolerance", tolerance, "accepted relative field error (auto's choice)")->check(CLI::PositiveNumber);
-    app.add_option("--smoothing", smoothing, "particle model: smoothed-dipole support in spacings (0 = spheres)")
-        ->check(CLI::NonNegativeNumber);
-    app.add_option("--local-correction", localCorrection,
-                   "the smoothed model's local correction, true or false (default: the simulation's default)");
-    app.add_option("--repeats", repeats,
-                   "layer bench: cold solves per timed row (direct, tree, external, auto, the estimate's "
-                   "all-pairs pass), the fastest reported; --particles times one solve each")
-        ->check(CLI::Range(1, 100));
-    app.add_option("--direct-max", directMax, "largest size solved directly (above: estimated)");
-    app.add_option("--sizes", sizes, "particle counts of the synthetic layer, comma-separated")->delimiter(',');
-    app.add_option("--particles", particleFile, "bench on the particles of this ferro-sim file instead")
-        ->check(CLI::ExistingFile);
-    app.add_option("--thetas", thetas, "opening angles for --particles, comma-separated")->delimiter(',')->check(CLI::Range(0.05, 1.0));
-    return runCommandLine("bench-magnetization", app, argc, argv, {}, [&] {
-        for (size_t n : sizes)
-            if (n < 64) throw ArgumentError("--sizes: at least 64 particles per size (got " + std::to_string(n) + ")");
-        tbb::global_control limit(tbb::global_control::max_allowed_parallelism, size_t(threads));
-        if (!particleFile.empty()) return particleFileBench(particleFile, thetas, tolerance, smoothing, localCorrection);
-        return layerBench(threads, theta, tolerance, smoothing, localCorrection, directMax, repeats, sizes);
-    });
-}
-
+/// The synthetic layer's table (the default run).
 int layerBench(int threads, double theta, double tolerance, double smoothing, bool localCorrection,
                size_t directMax, int repeats, const std::vector<size_t>& sizes) {
     std::string sizeList;
@@ -363,4 +322,42 @@ int layerBench(int threads, double theta, double tolerance, double smoothing, bo
                 "gradient: fieldGradient (total-field Jacobians for the Kelvin force), tree vs all pairs;\n"
                 "  err H column = relative RMS difference of the Jacobians, speedup column = direct / tree time.\n");
     return 0;
+}
+
+} // namespace
+
+int main(int argc, char** argv) {
+    int threads = 2;
+    double theta = 0.5, tolerance = 0.01, smoothing = MagnetizationParams{}.smoothing;
+    size_t directMax = 40960;
+    std::vector<size_t> sizes{10240, 40960, 163840};
+    std::string particleFile;
+    std::vector<double> thetas{0.3, 0.5, 0.8, 1.0};
+    bool localCorrection = MagnetizationParams{}.localCorrection;
+    int repeats = 3;
+    CLI::App app{"bench-magnetization: cost and accuracy of the magnetization solvers on a ferrofluid layer over "
+                 "a dipole (or on the particles of a ferro-sim file)"};
+    addThreadsOption(app, threads, "worker threads (0 = all cores)");
+    app.add_option("--theta", theta, "the tree's opening angle")->check(CLI::Range(0.05, 1.0));
+    app.add_option("--tolerance", tolerance, "accepted relative field error (auto's choice)")->check(CLI::PositiveNumber);
+    app.add_option("--smoothing", smoothing, "particle model: smoothed-dipole support in spacings (0 = spheres)")
+        ->check(CLI::NonNegativeNumber);
+    app.add_option("--local-correction", localCorrection,
+                   "the smoothed model's local correction, true or false (default: the simulation's default)");
+    app.add_option("--repeats", repeats,
+                   "layer bench: cold solves per timed row (direct, tree, external, auto, the estimate's "
+                   "all-pairs pass), the fastest reported; --particles times one solve each")
+        ->check(CLI::Range(1, 100));
+    app.add_option("--direct-max", directMax, "largest size solved directly (above: estimated)");
+    app.add_option("--sizes", sizes, "particle counts of the synthetic layer, comma-separated")->delimiter(',');
+    app.add_option("--particles", particleFile, "bench on the particles of this ferro-sim file instead")
+        ->check(CLI::ExistingFile);
+    app.add_option("--thetas", thetas, "opening angles for --particles, comma-separated")->delimiter(',')->check(CLI::Range(0.05, 1.0));
+    return runCommandLine("bench-magnetization", app, argc, argv, {}, [&] {
+        for (size_t n : sizes)
+            if (n < 64) throw ArgumentError("--sizes: at least 64 particles per size (got " + std::to_string(n) + ")");
+        const auto limit = limitThreads(threads);
+        if (!particleFile.empty()) return particleFileBench(particleFile, thetas, tolerance, smoothing, localCorrection);
+        return layerBench(tbb::this_task_arena::max_concurrency(), theta, tolerance, smoothing, localCorrection, directMax, repeats, sizes);
+    });
 }
