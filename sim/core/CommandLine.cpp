@@ -57,7 +57,14 @@ CLI::Option* addSetOption(CLI::App& app, std::vector<std::string>& overrides, co
 }
 
 CLI::Option* addThreadsOption(CLI::App& app, int& threads, const std::string& help) {
-    return app.add_option("--threads", threads, help)->check(CLI::NonNegativeNumber);
+    // Own wording: CLI::NonNegativeNumber's says "not in range 0.000000 to 1797...(300 digits)".
+    const CLI::Validator wholeNumber(
+        [](std::string& value) {
+            const bool digits = !value.empty() && value.find_first_not_of("0123456789") == std::string::npos;
+            return digits ? std::string() : "must be a whole number >= 0, 0 = all cores (got " + value + ")";
+        },
+        "N>=0");
+    return app.add_option("--threads", threads, help)->check(wholeNumber);
 }
 
 std::unique_ptr<tbb::global_control> limitThreads(int threads) {

@@ -165,4 +165,5 @@ TEST_CASE("the --set option collects every override in order, --threads takes N 
     const Run negative = run({"--threads", "-2"}, {}, [] { return 0; }, &app2);
     REQUIRE(negative.code == kExitBadInput);
     REQUIRE(negative.err.find("--threads") != std::string::npos);
+    REQUIRE(negative.err.find("must be a whole number >= 0, 0 = all cores (got -2)") != std::string::npos);
 }
