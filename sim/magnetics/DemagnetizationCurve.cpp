@@ -12,15 +12,104 @@ namespace ferro {
 DemagnetizationCurve::DemagnetizationCurve(double chi0, double Ms, int nodes)
     : chi0_(chi0), Ms_(Ms), nodes_(std::max(nodes, 2)), r_(size_t(std::max(nodes, 2)), 1.0) {}
 
+void DemagnetizationCurve::fit(const std::vector<double>& h, const std::vector<double>& mAlong,
+                               const std::vector<SurfaceSample>& surface, Fit how) {
+    fitted_ = true;
+    residual_ = 0;
+    r_.assign(size_t(nodes_), 1.0);
+    surface_ = how == Fit::FreeSurface && fitSurface(surface);
+    if (!surface_) fitNodes(h, mAlong, how == Fit::Nodes ? surface : std::vector<SurfaceSample>{});
+    const size_t n = std::min(h.size(), mAlong.size());
+    double miss2 = 0, total2 = 0;
+    for (size_t i = 0; i < n; ++i) {
+        if (!(h[i] > 0 && std::isfinite(h[i]) && std::isfinite(mAlong[i]))) continue;
+        const double d = mAlong[i] - magnetization(h[i]);
+        miss2 += d * d;
+        total2 += mAlong[i] * mAlong[i];
+    }
+    residual_ = total2 > 0 ? std::sqrt(miss2 / total2) : 0.0;
+}
+
+// ---- the surface fit ----------------------------------------------------------------------
+
+bool DemagnetizationCurve::fitSurface(const std::vector<SurfaceSample>& surface) {
+    std::vector<SurfaceSample> s;
+    for (const SurfaceSample& q : surface)
+        if (q.weight > 0 && q.h > 0 && std::isfinite(q.h) && std::isfinite(q.pressure) && std::isfinite(q.weight))
+            s.push_back(q);
+    if (s.size() < size_t(kMinSurfaceSamples)) return false;
+    // The range of h the surface spans, without its few outliers (a particle left in a gap).
+    std::vector<double> hs;
+    hs.reserve(s.size());
+    for (const SurfaceSample& q : s) hs.push_back(q.h);
+    std::sort(hs.begin(), hs.end());
+    hLo_ = hs[size_t(0.02 * double(hs.size() - 1))];
+    hHi_ = std::max(hs[size_t(0.98 * double(hs.size() - 1))], hLo_ * (1 + 1e-9));
+    hRef_ = std::sqrt(hLo_ * hHi_);
+    // Phi_k over [hLo, hHi] by the trapezoid rule in t = log h (dh = h dt); below hLo only
+    // the clamped l(hLo)^k times F_law.
+    const double t0 = std::log(hLo_), dt = (std::log(hHi_) - t0) / kSurfaceSteps;
+    const double lLo = std::log(hLo_ / hRef_);
+    surfaceTable_.assign(size_t(kSurfaceSteps + 1) * 3, 0.0);
+    const double Flo = langevinEnergy(hLo_, chi0_, Ms_);
+    for (int k = 0; k < 3; ++k) surfaceTable_[size_t(k)] = std::pow(lLo, k) * Flo;
+    auto integrand = [&](int g, int k) {
+        const double t = t0 + dt * double(g), hh = std::exp(t);
+        return std::pow(t - std::log(hRef_), k) * langevinMagnetization(hh, chi0_, Ms_) * hh;
+    };
+    for (int g = 1; g <= kSurfaceSteps; ++g)
+        for (int k = 0; k < 3; ++k)
+            surfaceTable_[size_t(g) * 3 + size_t(k)] =
+                surfaceTable_[size_t(g - 1) * 3 + size_t(k)] + 0.5 * dt * (integrand(g - 1, k) + integrand(g, k));
+    // Least squares over c0, c1, c2 and the constant C: G(h_s) - C = P_s, each row weighted
+    // by the sample's weight over sum w P^2 (scale-free).
+    Eigen::Matrix4d A = Eigen::Matrix4d::Zero();
+    Eigen::Vector4d y = Eigen::Vector4d::Zero();
+    double p2 = 0;
+    for (const SurfaceSample& q : s) p2 += q.weight * q.pressure * q.pressure;
+    if (!(p2 > 0)) return false;
+    for (const SurfaceSample& q : s) {
+        double phi[3];
+        surfaceBasis(q.h, phi);
+        const Eigen::Vector4d row(phi[0], phi[1], phi[2], -1.0);
+        A.noalias() += (q.weight / p2) * row * row.transpose();
+        y.noalias() += (q.weight / p2) * q.pressure * row;
+    }
+    // A vanishing ridge decides what the samples do not (all at one h: c1, c2 = 0).
+    A.diagonal().array() += 1e-12 * A.trace();
+    const Eigen::Vector4d c = A.ldlt().solve(y);
+    if (!c.allFinite()) return false;
+    for (int k = 0; k < 3; ++k) coef_[k] = c(k);
+    return true;
+}
+
+void DemagnetizationCurve::surfaceBasis(double h, double phi[3]) const {
+    const double lLo = std::log(hLo_ / hRef_), lHi = std::log(hHi_ / hRef_);
+    if (h <= hLo_) {
+        const double F = langevinEnergy(h, chi0_, Ms_);
+        for (int k = 0; k < 3; ++k) phi[k] = std::pow(lLo, k) * F;
+        return;
+    }
+    if (h >= hHi_) {
+        const double dF = langevinEnergy(h, chi0_, Ms_) - langevinEnergy(hHi_, chi0_, Ms_);
+        for (int k = 0; k < 3; ++k) phi[k] = surfaceTable_[size_t(kSurfaceSteps) * 3 + size_t(k)] + std::pow(lHi, k) * dF;
+        return;
+    }
+    const double u = (std::log(h) - std::log(hLo_)) / (std::log(hHi_) - std::log(hLo_)) * kSurfaceSteps;
+    const int g = std::clamp(int(u), 0, kSurfaceSteps - 1);
+    const double f = u - double(g);
+    for (int k = 0; k < 3; ++k)
+        phi[k] = (1 - f) * surfaceTable_[size_t(g) * 3 + size_t(k)] + f * surfaceTable_[size_t(g + 1) * 3 + size_t(k)];
+}
+
+// ---- the volume fit ---------------------------------------------------------------------
+
 double DemagnetizationCurve::nodePosition(double h) const {
     return std::clamp((std::log(h) - logLow_) / logSpan_ * double(nodes_ - 1), 0.0, double(nodes_ - 1));
 }
 
-void DemagnetizationCurve::fit(const std::vector<double>& h, const std::vector<double>& mAlong,
-                               const std::vector<SurfaceSample>& surface) {
-    fitted_ = true;
-    residual_ = 0;
-    r_.assign(size_t(nodes_), 1.0);
+void DemagnetizationCurve::fitNodes(const std::vector<double>& h, const std::vector<double>& mAlong,
+                                    const std::vector<SurfaceSample>& surface) {
     const size_t n = std::min(h.size(), mAlong.size());
     auto usable = [&](size_t i) { return h[i] > 0 && std::isfinite(h[i]) && std::isfinite(mAlong[i]); };
     double lo = 0, hi = 0;
@@ -100,31 +189,7 @@ void DemagnetizationCurve::fit(const std::vector<double>& h, const std::vector<d
     A(K, K) += lambda;   // C is free only with surface rows
     const Eigen::VectorXd r = A.ldlt().solve(y);
     for (int b = 0; b < K; ++b) r_[size_t(b)] = std::isfinite(r(b)) ? std::max(0.0, r(b)) : 1.0;
-    double miss2 = 0, total2 = 0;
-    for (size_t i = 0; i < n; ++i) {
-        if (!usable(i)) continue;
-        const double d = mAlong[i] - magnetization(h[i]);
-        miss2 += d * d;
-        total2 += mAlong[i] * mAlong[i];
-    }
-    residual_ = total2 > 0 ? std::sqrt(miss2 / total2) : 0.0;
 }
-
-double DemagnetizationCurve::ratio(double h) const {
-    if (!fitted_ || !(h > 0)) return r_.front();
-    const double u = nodePosition(h);
-    const int b = std::min(int(u), nodes_ - 2);
-    const double f = u - double(b);
-    return (1 - f) * r_[size_t(b)] + f * r_[size_t(b) + 1];
-}
-
-double DemagnetizationCurve::magnetization(double h) const {
-    return ratio(h) * langevinMagnetization(h, chi0_, Ms_);
-}
-
-} // namespace ferro
-
-namespace ferro {
 
 void DemagnetizationCurve::tabulate() {
     // Cumulative integrals of hat_b(log h) M_law(h) dh from the lowest node on, on a grid of
@@ -161,8 +226,31 @@ std::vector<double> DemagnetizationCurve::basisIntegrals(double h) const {
     return phi;
 }
 
+// ---- evaluation ---------------------------------------------------------------------------
+
+double DemagnetizationCurve::ratio(double h) const {
+    if (surface_) {
+        const double l = std::log(std::clamp(h > 0 ? h : hLo_, hLo_, hHi_) / hRef_);
+        return coef_[0] + l * (coef_[1] + l * coef_[2]);
+    }
+    if (!fitted_ || !(h > 0)) return r_.front();
+    const double u = nodePosition(h);
+    const int b = std::min(int(u), nodes_ - 2);
+    const double f = u - double(b);
+    return (1 - f) * r_[size_t(b)] + f * r_[size_t(b) + 1];
+}
+
+double DemagnetizationCurve::magnetization(double h) const {
+    return ratio(h) * langevinMagnetization(h, chi0_, Ms_);
+}
+
 double DemagnetizationCurve::potential(double h) const {
     if (!(h > 0)) return 0.0;
+    if (surface_) {
+        double phi[3];
+        surfaceBasis(h, phi);
+        return coef_[0] * phi[0] + coef_[1] * phi[1] + coef_[2] * phi[2];
+    }
     if (!fitted_ || table_.empty()) return ratio(h) * langevinEnergy(h, chi0_, Ms_);
     const std::vector<double> phi = basisIntegrals(h);
     double G = 0;

@@ -1,37 +1,41 @@
 #pragma once
-// The fluid's magnetization along the applied field as a function of the applied field's
-// strength alone, fitted to a self-consistent solve:
-//     M_f(h) = r(h) M_law(h),   h = |H_magnets|,
-// M_law the Langevin law of the applied field and r(h) the demagnetization ratio: how much
-// the fluid's own field (mostly the demagnetizing field of a layer magnetized across it)
-// lowers M where the applied field has strength h.
+// The magnetization the Kelvin body force uses, a function of the applied field's strength
+// alone, h = |H_magnets|, fitted at each self-consistent solve:
+//     M_f(h) = r(h) M_law(h),   G(h) = integral_0^h M_f dh',
+// M_law the Langevin law of the applied field, r(h) a ratio, G the force's potential: the
+// body force per volume is mu0 M_f(h) grad h = grad(mu0 G(h)).
 //
-// Why the Kelvin body force uses it instead of each particle's own M: the body force
-// mu0 (J_magnets M_i) with the self-consistent M_i of every particle is not a gradient. M_i
-// depends on where the other particles are (the layer's thickness, the heap's shape), not on
-// the applied field's strength alone, so curl f = mu0 grad M x grad h is not zero and the
-// force drives a steady convection roll: over a still dipole a pool never rests (up at the
-// centre, out along the top, measured 5 mm/s RMS on 2,000 particles against 0.6 mm/s with
-// the `external` solver, whatever the re-solve interval or a spatial smoothing of the induced
-// field). With M a function of h only, f = mu0 M_f(h) grad h = grad(mu0 G(h)), G' = M_f: a
-// potential force, which the pressure balances at rest. The fit keeps what the self-consistent
-// solve adds (the layer's demagnetization: for a layer magnetized across it M_law(H_in)
-// grad|H_magnets| integrates to the ferrohydrostatic Bernoulli law with its normal-traction
-// term mu0 M_n^2 / 2; tests/sim/sph/test_FluidMagnetics.cpp checks a resting pool against
-// it) and drops only the part of M_i that varies between particles at equal h.
+// Why a function of h and not each particle's own M: the body force mu0 (J_magnets M_i) with
+// the self-consistent M_i of every particle is not a gradient. M_i depends on where the other
+// particles are (the layer's thickness, the heap's shape), not on h alone, so
+// curl f = mu0 grad M x grad h is not zero and the force drives a steady convection roll:
+// over a still dipole a pool never rests (5 mm/s RMS on 2,000 particles against 0.6 mm/s
+// with the `external` solver). With M a function of h only the force is a potential force,
+// which the pressure balances at rest.
 //
-// The fit: r piecewise linear in log h on K nodes evenly spaced between the smallest and
-// largest h of the solve, constant beyond them. Least squares of two kinds of rows: each
-// particle's M along the applied field against r(h) M_law(h), and, given surface samples,
-// the potential G(h_s) = integral_0^h_s r M_law dh against the ferrohydrostatic surface
-// pressure F(H) + M_n^2 / 2 of the solve's surface samples, up to a free constant. In
-// an incompressible fluid a potential body force only shifts the pressure, so what shapes the
-// free surface is G along it; matching G to the surface pressure makes a resting surface the
-// ferrohydrostatic one, if the samples are the free surface (the volume rows still decide
-// the field strengths the surface does not reach). What the simulation passes at rest is the
-// floor and the walls instead, and resting pools miss the law by 13 % of the centre rise at
-// chi0 0.5 and 39-44 % at 1.5 (sim/sph/FluidMagnetics.cpp, tests/sim/sph/
-// test_FluidMagnetics.cpp). Nodes without data are linear between fitted ones.
+// Which function: in an incompressible fluid a potential force only shifts the pressure
+// inside; what shapes the free surface is G along it. At rest the surface obeys
+// rho g z_s = mu0 G(h) + C, and the ferrohydrostatic Bernoulli law (Rosensweig,
+// Ferrohydrodynamics, ch. 5) asks rho g z_s = mu0 (F(H) + M_n^2 / 2) + C with H and M the
+// total field and magnetization just inside the surface, M_n the normal component: the
+// magnetic pressure plus the normal traction. So G is fitted to the surface pressure
+// P = F(H) + M_n^2 / 2 of surface samples. Two fits (MagnetizationParams::CurveFit):
+//  - Fit::Nodes (the default): r piecewise linear in log h on K nodes evenly spaced between
+//    the smallest and largest h of the solve, constant beyond them. Least squares of each
+//    particle's M along the applied field against r(h) M_law(h) and, given samples,
+//    G(h_s) - C = P_s at a tenth of the weight for the particles. The simulation passes the
+//    solve's own surface weights, which at rest are the floor and the walls, not the free
+//    surface: resting pools miss the law by 13 % of the centre rise at chi0 0.5 and 39-44 %
+//    at 1.5, the heap too tall (tests/sim/sph/test_FluidMagnetics.cpp).
+//  - Fit::FreeSurface: samples on the free surface (FluidMagnetics::surfaceSamples), and
+//    r(h) = c0 + c1 l + c2 l^2, l = log(h_c / h_ref), h_c = h clamped to the samples' range
+//    (their 2nd to 98th percentile), least squares of G(h_s) - C = P_s over the samples alone
+//    (at least kMinSurfaceSamples; fewer fall back to the nodes without samples). A low-order
+//    curve on purpose: a curve free enough to follow each ring of the surface (16 nodes) let
+//    the traction feed the shape ring by ring and a pool at chi0 1.5 rippled; the fit is
+//    continuous in the samples (a node range that jumped with the samples' extent pumped a
+//    pool at 9 mm/s). Resting pools meet the law within 10-13 % (chi0 0.5) and 15-24 % (1.5)
+//    at 2,560 particles, 4.3 % and 12.8 % at 10,240.
 // Deterministic (sequential sums in the given order).
 #include <vector>
 
@@ -40,34 +44,38 @@ namespace ferro {
 class DemagnetizationCurve {
 public:
     static constexpr int kDefaultNodes = 16;
+    /// Fit::FreeSurface with fewer usable samples than this falls back to the nodes.
+    static constexpr int kMinSurfaceSamples = 16;
 
     /// Susceptibility chi0 [-] and saturation Ms [A/m] of the Langevin law (Ms = 0: linear).
     DemagnetizationCurve(double chi0 = 0, double Ms = 0, int nodes = kDefaultNodes);
 
-    /// A free-surface sample: the applied field strength h [A/m] there, the magnetic surface
-    /// pressure P = F(|H|) + M_n^2 / 2 [A^2/m^2] of the ferrohydrostatic Bernoulli law (H and
-    /// M just inside the surface, M_n the normal component; times mu0 it is in Pa) and a
-    /// weight >= 0 (how surely the particle is a surface particle).
+    /// A free-surface sample: the applied field strength h [A/m] at the surface, the
+    /// magnetic surface pressure P = F(|H|) + M_n^2 / 2 [A^2/m^2] of the ferrohydrostatic
+    /// Bernoulli law there (H and M just inside the surface, M_n the normal component;
+    /// times mu0 it is in Pa) and a weight >= 0 (how surely it is a surface point).
     struct SurfaceSample {
         double h = 0, pressure = 0, weight = 0;
     };
+    /// Which fit (see the header comment).
+    enum class Fit { Nodes, FreeSurface };
 
-    /// Fits r from the particles' applied field strengths `h` [A/m] and the components of
-    /// their magnetization along the applied field `mAlong` [A/m] (same length). Particles
-    /// with h <= 0 or non-finite values are ignored; with none left, r = 1 everywhere.
-    /// With `surface` samples the fit also asks the force's potential G(h) = integral_0^h
-    /// M_f dh' to equal the surface pressure P up to a constant at every sample, so that a
-    /// surface at rest in the force's potential is the ferrohydrostatic surface
-    /// rho g z_s = mu0 P + C; where the surface has no samples (the field strengths it does
-    /// not reach) the volume data decides.
+    /// Fits the curve. `h` [A/m] and `mAlong` [A/m] (same length): each particle's applied
+    /// field strength and magnetization along the applied field; entries with h <= 0 or
+    /// non-finite values are ignored, and with nothing usable r = 1. Fit::Nodes: r from the
+    /// particles, and G(h_s) - C = P_s at the `surface` samples at a tenth of their weight.
+    /// Fit::FreeSurface: with kMinSurfaceSamples usable samples or more, G from the samples
+    /// alone (the particles only give residual()); with fewer, Fit::Nodes without samples.
     void fit(const std::vector<double>& h, const std::vector<double>& mAlong,
-             const std::vector<SurfaceSample>& surface = {});
+             const std::vector<SurfaceSample>& surface = {}, Fit how = Fit::Nodes);
     /// G(h) = integral_0^h M_f(h') dh' [A^2/m^2]: mu0 G / rho0 is the body force's potential.
     double potential(double h) const;
 
     /// True once fit() has been called.
     bool fitted() const { return fitted_; }
-    /// The demagnetization ratio r(h) [-] (1 before any fit).
+    /// True when the last fit was the free-surface polynomial.
+    bool fittedToSurface() const { return surface_; }
+    /// The ratio r(h) [-] (1 before any fit).
     double ratio(double h) const;
     /// M_f(h) = r(h) M_law(h) [A/m].
     double magnetization(double h) const;
@@ -76,16 +84,29 @@ public:
     double residual() const { return residual_; }
 
 private:
+    // The volume fit's nodes.
     double nodePosition(double h) const;
     /// Phi_b(h) = integral_0^h hat_b(h') M_law(h') dh' for every node b (G = sum r_b Phi_b).
     std::vector<double> basisIntegrals(double h) const;
     void tabulate();
-    std::vector<double> table_;   // cumulative basis integrals on a fine log-h grid, row-major
+    void fitNodes(const std::vector<double>& h, const std::vector<double>& mAlong,
+                  const std::vector<SurfaceSample>& surface);
+    // The surface fit.
+    bool fitSurface(const std::vector<SurfaceSample>& surface);
+    /// Phi_k(h) = integral_0^h l(h')^k M_law(h') dh', k = 0..2, from the table over [hLo, hHi].
+    void surfaceBasis(double h, double phi[3]) const;
+
+    std::vector<double> table_;   // volume: cumulative basis integrals on a fine log-h grid
     int fine_ = 32;               // grid steps per node interval
     double chi0_, Ms_;
     int nodes_;
     double logLow_ = 0, logSpan_ = 1;
     std::vector<double> r_;
+    bool surface_ = false;
+    double coef_[3] = {1, 0, 0};  // surface: r = c0 + c1 l + c2 l^2
+    double hLo_ = 1, hHi_ = 1, hRef_ = 1;
+    static constexpr int kSurfaceSteps = 4096;   // fine enough that dG/dh is M_f within 0.1 %
+    std::vector<double> surfaceTable_;   // surface: Phi_k at kSurfaceSteps + 1 points over [hLo, hHi]
     double residual_ = 0;
     bool fitted_ = false;
 };

@@ -45,20 +45,38 @@ struct MagnetizationParams {
     /// curve fit blended into the last at 0.2, without which it did not rest under WCSPH) the
     /// Bernoulli deviation was 13.3 / 43.7 / 35.6 % of the centre rise (chi0 0.5 DFSPH, 1.5
     /// DFSPH, 1.5 WCSPH) against 13.1 / 38.8 / 43.5 % without it, RMS speed 0.55 / 0.76 /
-    /// 0.62 mm/s against 0.42-0.49. Off is exactly the model before it (surface term from any
+    /// 0.62 mm/s against 0.42-0.49 (both with the curve fitted to the floor and walls, as it
+    /// was then; measured 2026-12-02). Off is exactly the model before it (surface term from any
     /// deficit).
     bool localCorrection = false;
     /// How the magnetic force enters the fluid (sim/sph/FluidMagnetics.hpp has the
     /// derivation):
-    ///   Body     (default) a body force mu0 (M . grad) H_magnets per particle from the
-    ///            magnets' field gradient; no normal traction of the particles' own field.
+    ///   Body     (default) a body force per particle from the magnets' field gradient,
+    ///            mu0 M_f(|H_magnets|) grad |H_magnets|: with `external` M_f is the Langevin
+    ///            law, with a self-consistent solver a curve fitted at each solve so that its
+    ///            potential along the free surface is the surface's F(H) + M_n^2 / 2, normal
+    ///            traction included (sim/magnetics/DemagnetizationCurve.hpp).
     ///   Surface  (experimental) the Kelvin force density mu0 (M . grad) H of the TOTAL
     ///            field, which for M parallel to H is the gradient of the magnetic pressure
     ///            mu0 F(H), taken into the pressure: what remains is a pressure on the free
     ///            surface, C - mu0 (F(H) + M_n^2 / 2) (Rosensweig's ferrohydrostatic
     ///            boundary condition, normal traction included).
     enum class Force { Surface, Body };
+    /// Body force with a self-consistent solver: what the force's curve M_f(|H_magnets|)
+    /// (sim/magnetics/DemagnetizationCurve.hpp) is fitted to.
+    ///   Boundary     (default) the particles' demagnetized M, and the magnetic pressure
+    ///                F(H) + M_n^2 / 2 where the solve's dipole kernels are a fifth empty:
+    ///                at rest the floor and walls. Resting pools miss the Bernoulli law by
+    ///                13 % of the heap's rise at chi0 0.5, 39-44 % at 1.5 (too tall).
+    ///   FreeSurface  the free surface's F(H) + M_n^2 / 2 (colour gradient and exposure,
+    ///                half a spacing out): 10-13 % / 15-24 % at 2,560 particles, 4.3 / 12.8 %
+    ///                at 10,240; heaps 35-50 % lower than Boundary's. Not the default yet:
+    ///                each solve refits the curve to a surface whose particles shuffle, and
+    ///                the heap keeps moving (the still-magnet spike tips of issue 14 matched
+    ///                97.8 % frame to frame instead of 99.6 %, under the 98 % asked).
+    enum class CurveFit { Boundary, FreeSurface };
     Force force = Force::Body;
+    CurveFit curveFit = CurveFit::Boundary;
     bool enabled() const { return susceptibility > 0; }
 };
 

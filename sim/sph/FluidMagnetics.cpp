@@ -110,7 +110,7 @@ void FluidMagnetics::applyLaw() {
     });
 }
 
-void FluidMagnetics::solve(const std::vector<Vec3>& x, bool forced) {
+void FluidMagnetics::solve(const std::vector<Vec3>& x, const std::function<SurfaceView()>& surface, bool forced) {
     const size_t n = x.size();
     // A forced solve (frame start) measures nothing: a resumed run, which has no cache to
     // measure, then continues with exactly the interval the file recorded.
@@ -168,34 +168,29 @@ void FluidMagnetics::solve(const std::vector<Vec3>& x, bool forced) {
             h[i] = he.norm();
             along[i] = h[i] > 0 ? M_[i].cast<double>().dot(he) / h[i] : 0.0;
         });
-        // The boundary as the solve saw it: its pressure F(H) + M_n^2 / 2 (the
-        // ferrohydrostatic Bernoulli law's magnetic side) against the applied field there.
-        // Measured (issue 13): on a resting pool these samples are the floor and the walls,
-        // not the free surface. The dipole kernel (2.5 spacings) is 35 % empty at a floor
-        // particle but only 7 % under the top layer (it reaches half a spacing past the
-        // particles), under the 0.2 threshold; 0 of ~490 samples lie on the free surface at
-        // rest, and the law holds within 10 % (chi0 0.5) but 34 % (1.5) of the heap's rise at
-        // 10,240 particles, the heap too tall where the traction dominates. Free-surface
-        // samples (the surface model's colour gradient and exposure, the applied field and
-        // F + M_n^2 / 2 half a spacing out, where the fluid ends) did not do better yet on the
-        // suite's 2,560-particle pool: 74 % at chi0 0.5 (a crater on the axis), 26 % at 1.5;
-        // weighted to dominate the volume rows, 17.5 % and 62 %, the surface at 1.5 rippling
-        // into rings (the heap's top is at the threshold of the normal-field instability
-        // there, and such a fit lets the traction follow the shape). With the volume rows left
-        // out over the surface's field strengths it meets the law within 9.5 % / 7.9 % on a
-        // 10,240-particle pool but is unstable at 2,560: README, magnetics.
-        std::vector<DemagnetizationCurve::SurfaceSample> surface;
-        const std::vector<Real>& w = solver_->surfaceWeight();
-        const std::vector<Vec3>& normal = solver_->surfaceNormal();
-        if (w.size() == n && normal.size() == n)
-            for (size_t i = 0; i < n; ++i) {
-                const double weight = double(w[i]) - 0.2;
-                if (!(weight > 0) || !(h[i] > 0)) continue;
-                const double mn = M_[i].cast<double>().dot(normal[i].cast<double>());
-                const double p = langevinEnergy(H_[i].cast<double>().norm(), law_.susceptibility, law_.saturation) + 0.5 * mn * mn;
-                surface.push_back({h[i], p, weight});
-            }
-        curve_.fit(h, along, surface);
+        // The curve's potential is fitted to the magnetic pressure of surface samples, so
+        // that a surface at rest obeys the ferrohydrostatic Bernoulli law
+        // (DemagnetizationCurve.hpp; MagnetizationParams::CurveFit).
+        if (law_.curveFit == MagnetizationParams::CurveFit::FreeSurface) {
+            curve_.fit(h, along, surfaceSamples(x, surface()), DemagnetizationCurve::Fit::FreeSurface);
+        } else {
+            // The solve's own surface weights (the dipole kernel at least a fifth empty): on
+            // a resting pool the floor and the walls, not the free surface (0 of ~490 samples
+            // on it: the kernel is 35 % empty at a floor particle, only 7 % under the top
+            // layer), and the heap at chi0 1.5 stands too tall (README, magnetics).
+            std::vector<DemagnetizationCurve::SurfaceSample> boundary;
+            const std::vector<Real>& w = solver_->surfaceWeight();
+            const std::vector<Vec3>& normal = solver_->surfaceNormal();
+            if (w.size() == n && normal.size() == n)
+                for (size_t i = 0; i < n; ++i) {
+                    const double weight = double(w[i]) - 0.2;
+                    if (!(weight > 0) || !(h[i] > 0)) continue;
+                    const double mn = M_[i].cast<double>().dot(normal[i].cast<double>());
+                    const double p = langevinEnergy(H_[i].cast<double>().norm(), law_.susceptibility, law_.saturation) + 0.5 * mn * mn;
+                    boundary.push_back({h[i], p, weight});
+                }
+            curve_.fit(h, along, boundary, DemagnetizationCurve::Fit::Nodes);
+        }
     }
     HextSolved_ = Hext_;
     extSolved2_ = deterministicSum(n, [&](size_t i) { return double(Hext_[i].squaredNorm()); });
@@ -211,9 +206,49 @@ void FluidMagnetics::solve(const std::vector<Vec3>& x, bool forced) {
     stats_.residual = std::max(stats_.residual, st.residual);
 }
 
-void FluidMagnetics::update(double t, const std::vector<Vec3>& x, const std::vector<Vec3>& colorGradient,
-                            const std::vector<Real>& exposure, bool forceSolve) {
+std::vector<DemagnetizationCurve::SurfaceSample> FluidMagnetics::surfaceSamples(const std::vector<Vec3>& x,
+                                                                               const SurfaceView& view) const {
+    // The free surface: particles whose colour gradient is at least half a flat surface's
+    // and with no fluid in their outward cone (surface weight w >= 1/2, as the surface model's
+    // C). Each sample sits half a spacing out along -grad c, where the fluid the particle
+    // stands for ends and its pressure is zero: there the applied field (analytic: it changes
+    // by up to 20 % per spacing near a magnet) plus the particle's own induced field (which
+    // changes by 2-5 % per spacing near the top), M from the Langevin law of that field, and
+    // P = F(H) + M_n^2 / 2 (the same surface and field tests/sim/sph/test_FluidMagnetics.cpp
+    // checks the law on). Tried and dropped: a kernel-smoothed normal (25 % of the rise off
+    // the law instead of 15 % on the suite's pool at chi0 1.5), samples from w >= 0.8 only
+    // (37 %), from w >= 0.25 (the still-magnet tips no steadier).
+    std::vector<DemagnetizationCurve::SurfaceSample> out;
+    const size_t n = x.size();
+    if (!view.colorGradient || !view.exposure || view.colorGradient->size() != n || view.exposure->size() != n) return out;
+    const double chi0 = law_.susceptibility, Ms = law_.saturation;
+    for (size_t i = 0; i < n; ++i) {
+        const Vec3d g = (*view.colorGradient)[i].cast<double>();
+        const double gn = g.norm();
+        if (!(gn > 0)) continue;
+        const double weight = surfaceWeight(gn) * double((*view.exposure)[i]);
+        if (!(weight >= 0.5)) continue;
+        const Vec3d outward = -g / gn;
+        const Vec3d xs = x[i].cast<double>() + 0.5 * spacing_ * outward;
+        const Vec3d applied = magnetField(magnets_, xs);
+        const Vec3d Hs = applied + Hind_[i].cast<double>();
+        const double hs = Hs.norm();
+        const double Mn = hs > 0 ? langevinMagnetization(hs, chi0, Ms) * Hs.dot(outward) / hs : 0.0;
+        out.push_back({applied.norm(), langevinEnergy(hs, chi0, Ms) + 0.5 * Mn * Mn, weight});
+    }
+    return out;
+}
+
+void FluidMagnetics::update(double t, const std::vector<Vec3>& x, const SurfaceProbe& surface, bool forceSolve) {
     if (!active()) return;
+    // The surface costs a neighbour sweep: asked for at most once, and only when used.
+    SurfaceView view;
+    bool probed = false;
+    const std::function<SurfaceView()> surfaceOnce = [&]() {
+        if (!probed && surface) view = surface();
+        probed = true;
+        return view;
+    };
     const size_t n = x.size();
     magnets_ = softenedMagnetsAt(t);
     Hext_.resize(n);
@@ -245,7 +280,7 @@ void FluidMagnetics::update(double t, const std::vector<Vec3>& x, const std::vec
     }
     const bool solving = forceSolve || solveIsStale();
     if (solving) {
-        solve(x, forceSolve);
+        solve(x, surfaceOnce, forceSolve);
     } else {
         // Between solves: the cached induced field, the current applied field, the law.
         // The induced field is proportional to M, which follows the applied field: the
@@ -257,7 +292,7 @@ void FluidMagnetics::update(double t, const std::vector<Vec3>& x, const std::vec
         ++stepsSinceSolve_;
     }
     maxFieldSeen_ = std::max(maxFieldSeen_, largest(H_));
-    computeKelvin(x, colorGradient, exposure);
+    computeKelvin(x, surfaceOnce);
     if (solving) {
         // How much the Kelvin force matters beside gravity (see solveIsStale()).
         const double kelvin2 = deterministicSum(n, [&](size_t i) { return double(kelvin_[i].squaredNorm()); });
@@ -267,12 +302,12 @@ void FluidMagnetics::update(double t, const std::vector<Vec3>& x, const std::vec
     }
 }
 
-void FluidMagnetics::computeKelvin(const std::vector<Vec3>& x, const std::vector<Vec3>& colorGradient,
-                                   const std::vector<Real>& exposure) {
+void FluidMagnetics::computeKelvin(const std::vector<Vec3>& x, const std::function<SurfaceView()>& surface) {
     const size_t n = x.size();
     kelvin_.resize(n);
-    if (law_.force == MagnetizationParams::Force::Surface && colorGradient.size() == n && exposure.size() == n)
-        computeSurfacePressure(x, colorGradient, exposure);
+    const SurfaceView view = law_.force == MagnetizationParams::Force::Surface ? surface() : SurfaceView{};
+    if (view.colorGradient && view.exposure && view.colorGradient->size() == n && view.exposure->size() == n)
+        computeSurfacePressure(x, *view.colorGradient, *view.exposure);
     else
         computeBodyForce(x);
     maxAcceleration_ = std::sqrt(double(tbb::parallel_reduce(

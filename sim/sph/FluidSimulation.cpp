@@ -538,9 +538,19 @@ void FluidSimulation::computeSurfaceNormals() {
 }
 
 void FluidSimulation::updateMagnetics(bool forceSolve) {
-    if (magnetics_->needsColorGradient()) {
-        // The surface model's colour gradient grad c_i = V sum_j grad W_ij + sum_b V_b
-        // grad W_ib: fluid and walls, so a wetted wall is no surface (FluidMagnetics.hpp).
+    // The free surface, computed only when the magnetics ask for it (after a self-consistent
+    // solve, and every step for the surface model): FluidMagnetics::SurfaceView.
+    const FluidMagnetics::SurfaceProbe surface = [this]() {
+        computeSurfaceView();
+        return FluidMagnetics::SurfaceView{&colorGradient_, &exposure_};
+    };
+    magnetics_->update(time_, x_, surface, forceSolve);
+}
+
+void FluidSimulation::computeSurfaceView() {
+    {
+        // The colour gradient grad c_i = V sum_j grad W_ij + sum_b V_b grad W_ib: fluid and
+        // walls, so a wetted wall is no surface (FluidMagnetics.hpp).
         // Tried and dropped: the fluid's gradient alone with its part away from a wall
         // removed (the same 18 mm/s at the rim of a pool over a magnet, and faster outliers).
         const size_t n = x_.size();
@@ -560,11 +570,8 @@ void FluidSimulation::updateMagnetics(bool forceSolve) {
             }
             colorGradient_[i] = fluid + wall;
         });
-    } else {
-        colorGradient_.clear();
     }
-    if (colorGradient_.empty()) exposure_.clear();
-    else {
+    {
         // Exposure: 1 when no fluid particle stands in the cone of half-angle ~40 degrees
         // along the outward direction -grad c within 1.5 spacings, falling smoothly to 0
         // as one enters it (the scan-region test of Marrone et al. 2010). In a moving,
@@ -593,7 +600,6 @@ void FluidSimulation::updateMagnetics(bool forceSolve) {
             exposure_[i] = 1 - covered;
         });
     }
-    magnetics_->update(time_, x_, colorGradient_, exposure_, forceSolve);
 }
 
 void FluidSimulation::computeAccelerations(const Real* pOverRho2) {

@@ -189,6 +189,8 @@ private:
     /// The colour gradient the magnetic surface force needs (when it does), then the
     /// magnetic update of the step.
     void updateMagnetics(bool forceSolve);
+    /// colorGradient_ and exposure_ of the current positions (FluidMagnetics::SurfaceView).
+    void computeSurfaceView();
     /// The step: the smallest of the solver's, the force, capillary and viscous limits and
     /// sim.max_dt (`stable`, when given), then shortened to land on dtLimit.
     double chooseTimeStep(double dtLimit, double speed, double* stable = nullptr) const;
@@ -226,8 +228,8 @@ private:
     std::vector<Vec3> x_, v_, a_, xOld_;
     std::vector<Real> rho_, p_;
     std::vector<Vec3> normal_;
-    std::vector<Vec3> colorGradient_;         // grad c (walls taken out), for the magnetic force
-    std::vector<Real> exposure_;                  // exposure of the surface (1 = open), for the magnetic force
+    std::vector<Vec3> colorGradient_;         // grad c (fluid and walls), for the magnetics, on demand
+    std::vector<Real> exposure_;              // exposure of the surface (1 = open), with colorGradient_
     std::vector<uint32_t> id_;
     std::vector<uint16_t> boundaryCount_;
     SortedGrid grid_;

@@ -5,6 +5,7 @@
 
 #include <catch2/catch.hpp>
 
+#include <algorithm>
 #include <cmath>
 #include <random>
 #include <vector>
@@ -111,4 +112,62 @@ TEST_CASE("surface samples make the force's potential the surface pressure up to
     // potential() is the integral of magnetization(): a central difference of G is M_f.
     for (double v : {4e3, 3e4}) REQUIRE((curve.potential(v * 1.001) - curve.potential(v / 1.001)) / (v * 1.001 - v / 1.001) ==
                                         Approx(curve.magnetization(v)).epsilon(1e-2));
+}
+
+TEST_CASE("the free-surface fit: the force's potential is the samples' pressure up to a constant", "[magnetics][demagnetization]") {
+    // Surface pressures from a known ratio r_s(h), quadratic in log h (0.3 at lo, 0.75 at hi,
+    // bowed), plus a constant offset; the reference potential integral r_s M_law dh by
+    // Simpson's rule here, independent of the curve's tables. Volume data that says otherwise
+    // (r = 1) must not matter: the surface alone decides.
+    const double chi0 = 1.5, Ms = 35000, lo = 2e3, hi = 5e4;
+    const double span = std::log(hi / lo);
+    auto rs = [&](double h) {
+        const double u = std::log(h / lo) / span;
+        return 0.3 + 0.25 * u + 0.2 * u * u;
+    };
+    auto reference = [&](double h) {   // integral_0^h r_s(clamp) M_law dh', Simpson in log h above 1 A/m
+        const int steps = 20000;
+        const double a = std::log(1.0), b = std::log(h), dt = (b - a) / steps;
+        auto f = [&](double t) {
+            const double v = std::exp(t);
+            return rs(std::clamp(v, lo, hi)) * langevinMagnetization(v, chi0, Ms) * v;
+        };
+        double sum = f(a) + f(b);
+        for (int i = 1; i < steps; ++i) sum += (i % 2 ? 4 : 2) * f(a + i * dt);
+        return sum * dt / 3;
+    };
+    std::vector<double> h, m;
+    std::vector<DemagnetizationCurve::SurfaceSample> surface;
+    for (int i = 0; i <= 400; ++i) {
+        const double v = lo * std::pow(hi / lo, i / 400.0);
+        h.push_back(v);
+        m.push_back(langevinMagnetization(v, chi0, Ms));   // r = 1 in the volume
+        surface.push_back({v, reference(v) + 1234.5, 1.0});
+    }
+    DemagnetizationCurve curve(chi0, Ms);
+    curve.fit(h, m, surface, DemagnetizationCurve::Fit::FreeSurface);
+    REQUIRE(curve.fittedToSurface());
+    const double range = reference(hi) - reference(lo);
+    for (double v : {3e3, 8e3, 2e4, 4.5e4}) {
+        CAPTURE(v);
+        REQUIRE(curve.potential(v) - curve.potential(lo * 1.2) == Approx(reference(v) - reference(lo * 1.2)).margin(2e-3 * range));
+        REQUIRE(curve.ratio(v) == Approx(rs(v)).margin(0.01));
+    }
+    // Beyond the samples' range (their 2nd to 98th percentile) r is held at its end values.
+    REQUIRE(curve.ratio(1e3) == Approx(curve.ratio(lo * 1.1)).margin(0.01));
+    REQUIRE(curve.ratio(1e5) == Approx(curve.ratio(hi / 1.1)).margin(0.01));
+    // The particles alone (and the node fit) give r = 1 and another potential.
+    DemagnetizationCurve volumeOnly(chi0, Ms);
+    volumeOnly.fit(h, m);
+    REQUIRE_FALSE(volumeOnly.fittedToSurface());
+    REQUIRE(volumeOnly.ratio(1e4) == Approx(1.0).epsilon(1e-6));
+    REQUIRE(std::abs((volumeOnly.potential(hi) - volumeOnly.potential(lo)) - range) > 0.5 * range);
+    // Too few surface samples (under kMinSurfaceSamples) are no surface: the volume decides.
+    DemagnetizationCurve sparse(chi0, Ms);
+    sparse.fit(h, m, std::vector<DemagnetizationCurve::SurfaceSample>(surface.begin(), surface.begin() + DemagnetizationCurve::kMinSurfaceSamples - 1),
+               DemagnetizationCurve::Fit::FreeSurface);
+    REQUIRE_FALSE(sparse.fittedToSurface());
+    // potential() is the integral of magnetization(): a central difference of G is M_f.
+    for (double v : {4e3, 3e4}) REQUIRE((curve.potential(v * 1.001) - curve.potential(v / 1.001)) / (v * 1.001 - v / 1.001) ==
+                                        Approx(curve.magnetization(v)).epsilon(2e-3));
 }

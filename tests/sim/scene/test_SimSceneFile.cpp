@@ -624,6 +624,14 @@ TEST_CASE("magnetization.opening_angle is refused outside the tree's working ran
                    Contains("magnetization.opening_angle: must be in [0.05, 1]"));
 }
 
+TEST_CASE("magnetization.curve_fit chooses what the body force's curve is fitted to", "[scene]")
+{
+    CHECK(scene(kMinimal).magnetization.curveFit == MagnetizationParams::CurveFit::Boundary);
+    CHECK(scene(kMinimal + "[magnetization]\ncurve_fit = \"free_surface\"\n").magnetization.curveFit ==
+          MagnetizationParams::CurveFit::FreeSurface);
+    CHECK_THAT(sceneError(kMinimal + "[magnetization]\ncurve_fit = \"surface\"\n"), Contains("curve_fit"));
+}
+
 TEST_CASE("magnetization.smoothing selects the particle model", "[scene]")
 {
     CHECK(scene(kMinimal).magnetization.smoothing == 2.5); // smoothed dipoles by default

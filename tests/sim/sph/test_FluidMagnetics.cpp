@@ -363,7 +363,7 @@ moment = 2.0
     REQUIRE(mag.active());
     REQUIRE(mag.magnetic());
     std::vector<Vec3> x = {Vec3(0, 0, 0.01f), Vec3(0.01f, 0.004f, 0.012f), Vec3(-0.02f, 0.01f, 0.03f)};
-    mag.update(0.0, x, {}, {}, true);
+    mag.update(0.0, x, {}, true);
     std::vector<Vec3> a(x.size(), Vec3::Zero());
     mag.addKelvinAcceleration(a);
     const std::vector<Magnet> magnets = mag.softenedMagnetsAt(0.0);
@@ -679,13 +679,16 @@ TEST_CASE("a pool over a magnet held still comes to rest in ferrohydrostatic bal
     struct Case {
         std::string solver, magnetization;
         double susceptibility;
+        std::string curveFit = "boundary";
     };
     const Case c = GENERATE(Case{"dfsph", "external", 1.5}, Case{"wcsph", "external", 1.5}, Case{"dfsph", "auto", 0.5},
-                            Case{"dfsph", "auto", 1.5}, Case{"wcsph", "auto", 1.5});
+                            Case{"dfsph", "auto", 1.5}, Case{"wcsph", "auto", 1.5}, Case{"dfsph", "auto", 0.5, "free_surface"},
+                            Case{"dfsph", "auto", 1.5, "free_surface"}, Case{"wcsph", "auto", 1.5, "free_surface"});
     // examples/ferrohydrostatic_pool.toml: 2,560 particles, a 3 A m^2 dipole 2 cm under the floor.
     FluidSimulation sim(loadExample("ferrohydrostatic_pool.toml",
                                     {"sim.solver=\"" + c.solver + "\"", "magnetization.solver=\"" + c.magnetization + "\"",
-                                     "magnetization.susceptibility=" + std::to_string(c.susceptibility)}));
+                                     "magnetization.susceptibility=" + std::to_string(c.susceptibility),
+                                     "magnetization.curve_fit=\"" + c.curveFit + "\""}));
     REQUIRE(sim.magnetics() != nullptr);
     double rms = 0;
     for (int frame = 1; frame <= 8; ++frame) {   // 4 frames a second, as ferro-sim would step them
@@ -696,7 +699,7 @@ TEST_CASE("a pool over a magnet held still comes to rest in ferrohydrostatic bal
     REQUIRE(allFinite(sim));
     // From 4 mm inside the wall (clear of the meniscus) to the centre.
     const SurfaceBalance heap = surfaceBalance(sim, Vec2d(0.021, 0), Vec2d(0, 0));
-    CAPTURE(c.solver, c.magnetization, c.susceptibility, rms, sim.spacing(), heap.rise, heap.predicted);
+    CAPTURE(c.solver, c.magnetization, c.susceptibility, c.curveFit, rms, sim.spacing(), heap.rise, heap.predicted);
     REQUIRE(rms < 0.001);
     if (c.magnetization == "external") {
         REQUIRE(heap.predicted > sim.spacing());
@@ -718,13 +721,24 @@ TEST_CASE("a pool over a magnet held still comes to rest in ferrohydrostatic bal
         // outermost ring, at chi0 1.5.) The cause:
         // the DemagnetizationCurve's surface samples are the floor and walls at rest, not the
         // free surface (sim/sph/FluidMagnetics.cpp; README, magnetics).
+        // With magnetization.curve_fit = "free_surface" the curve's potential is fitted to the
+        // free surface's F + M_n^2 / 2 (FluidMagnetics::surfaceSamples), so the law is what
+        // the force is built to meet; what is left is how well a smooth curve of |H_magnets|
+        // and a 2,560-particle surface can. Measured (2026-12-02): 9.6-12.9 % (chi0 0.5),
+        // 15-18.5 % (1.5, DFSPH), 24 % (1.5, WCSPH), RMS speed 0.5-0.9 mm/s; single looks
+        // scatter by +-10 %, and two builds that differ only in rounding read 15 and 18.5 % on
+        // the same case. The issue's 10 %: met at chi0 0.5 within that scatter (4.3 % on the
+        // 10,240-particle pool below), not at 1.5 (12.8 % there). Bounds with the scatter's room.
         const BernoulliCheck law = bernoulliCheckOverTime(sim, 0.025);
-        WARN("Bernoulli along the surface (" << c.solver << ", chi0 " << c.susceptibility << "): centre rise "
+        WARN("Bernoulli along the surface (" << c.solver << ", chi0 " << c.susceptibility << ", curve fit " << c.curveFit << "): centre rise "
              << law.rise << " Pa, worst deviation " << law.worst << " Pa, with the capillary term "
              << law.worstCapillary << " Pa; on the axis mu0 F = " << law.pressure << " Pa, mu0 Mn^2/2 = "
              << law.traction << " Pa, sigma div n = " << law.capillary << " Pa; RMS speed " << 1e3 * rms << " mm/s");
         REQUIRE(law.traction > 0.2 * law.pressure);   // the traction term matters here
-        REQUIRE(law.worst < (c.susceptibility < 1 ? 0.20 : 0.50) * law.rise);
+        if (c.curveFit == "boundary")
+            REQUIRE(law.worst < (c.susceptibility < 1 ? 0.20 : 0.50) * law.rise);
+        else
+            REQUIRE(law.worst < (c.susceptibility < 1 ? 0.20 : 0.32) * law.rise);
     }
 }
 
@@ -755,22 +769,29 @@ TEST_CASE("the suite pool's Bernoulli deviation with and without surface tension
 // mu0 F = 28 Pa), the heap too tall on the axis. The issue's 10 %: met at chi0 0.5 only
 // within the ruler's few percent, not at 1.5; four times the particles of the suite's pool
 // (13.1 / 38.8 %) bring it little closer, so the miss at 1.5 is the model's, not the
-// resolution's (README, magnetics). The bounds hold today's model where it is.
+// resolution's (README, magnetics). The bounds hold today's model where it is. With
+// magnetization.curve_fit = "free_surface": 4.3 % (chi0 0.5; rise 30 Pa) and 12.8 % (1.5; rise
+// 32 Pa, on the axis mu0 F 32 Pa, mu0 Mn^2/2 45 Pa), RMS speed 0.49 / 0.64 mm/s.
 TEST_CASE("a finer pool over a still magnet: the Bernoulli law within 15 % at chi0 0.5, 45 % at 1.5",
           "[.][bernoulli-fine][magnetics][slow]") {
     const double chi0 = GENERATE(0.5, 1.5);
+    const std::string fit = GENERATE(std::string("boundary"), std::string("free_surface"));
     FluidSimulation sim(loadExample("ferrohydrostatic_pool.toml",
-                                    {"fluid.block.0.count=10240", "magnetization.susceptibility=" + std::to_string(chi0)}));
+                                    {"fluid.block.0.count=10240", "magnetization.susceptibility=" + std::to_string(chi0),
+                                     "magnetization.curve_fit=\"" + fit + "\""}));
     const double rms = settleForTwoSeconds(sim);
     REQUIRE(allFinite(sim));
     const BernoulliCheck law = bernoulliCheckOverTime(sim, 0.025);
-    WARN("Bernoulli, 10,240 particles, chi0 " << chi0 << ": centre rise " << law.rise << " Pa, worst deviation "
+    WARN("Bernoulli, 10,240 particles, chi0 " << chi0 << ", curve fit " << fit << ": centre rise " << law.rise << " Pa, worst deviation "
          << law.worst << " Pa (" << 100 * law.worst / law.rise << " %), with the capillary term " << law.worstCapillary
          << " Pa (" << 100 * law.worstCapillary / law.rise << " %); on the axis mu0 F = " << law.pressure
          << " Pa, mu0 Mn^2/2 = " << law.traction << " Pa, sigma div n = " << law.capillary << " Pa; RMS speed "
          << 1e3 * rms << " mm/s");
     REQUIRE(rms < 0.001);
-    REQUIRE(law.worst < (chi0 < 1 ? 0.15 : 0.45) * law.rise);
+    if (fit == "boundary")
+        REQUIRE(law.worst < (chi0 < 1 ? 0.15 : 0.45) * law.rise);
+    else
+        REQUIRE(law.worst < (chi0 < 1 ? 0.10 : 0.20) * law.rise);
 }
 
 namespace {
