@@ -34,8 +34,9 @@
 //    curve on purpose: a curve free enough to follow each ring of the surface (16 nodes) let
 //    the traction feed the shape ring by ring and a pool at chi0 1.5 rippled; the fit is
 //    continuous in the samples (a node range that jumped with the samples' extent pumped a
-//    pool at 9 mm/s). Resting pools meet the law within 10-13 % (chi0 0.5) and 15-24 % (1.5)
-//    at 2,560 particles, 4.3 % and 12.8 % at 10,240.
+//    pool at 9 mm/s). r is not clamped at zero: where the surface pressure falls as h rises
+//    (a surface the field runs along), so does G. Resting pools meet the law within
+//    10-13 % (chi0 0.5) and 15-24 % (1.5) at 2,560 particles, 4.3 % and 12.8 % at 10,240.
 // Deterministic (sequential sums in the given order).
 #include <vector>
 

@@ -124,9 +124,10 @@ public:
     /// Brings H, M and the magnetic acceleration up to date for particles at `x` (current
     /// sorted order) at time t: applied field re-evaluated, the induced field re-solved
     /// when stale (always when `forceSolve`), M from the Langevin law, then the force of
-    /// the model (see above). `surface` is called at most once: after a self-consistent
-    /// solve (the DemagnetizationCurve's surface samples) and every step for the surface
-    /// model; empty, or returning empty vectors, means no surface is known.
+    /// the model (see above). `surface` is called at most once a step, and only when used:
+    /// after a self-consistent solve with magnetization.curve_fit = "free_surface" (the
+    /// curve's samples, surfaceSamples()) and every step for force = "surface"; an empty
+    /// probe, or one returning empty vectors, means no surface is known.
     void update(double t, const std::vector<Vec3>& x, const SurfaceProbe& surface, bool forceSolve);
     /// Surface weight w in [0, 1] of a particle from its colour gradient |grad c| [1/m].
     double surfaceWeight(double gradient) const;

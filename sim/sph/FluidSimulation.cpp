@@ -539,7 +539,8 @@ void FluidSimulation::computeSurfaceNormals() {
 
 void FluidSimulation::updateMagnetics(bool forceSolve) {
     // The free surface, computed only when the magnetics ask for it (after a self-consistent
-    // solve, and every step for the surface model): FluidMagnetics::SurfaceView.
+    // solve with curve_fit = "free_surface", and every step for the surface model):
+    // FluidMagnetics::SurfaceView.
     const FluidMagnetics::SurfaceProbe surface = [this]() {
         computeSurfaceView();
         return FluidMagnetics::SurfaceView{&colorGradient_, &exposure_};
