@@ -54,8 +54,8 @@ struct MagnetizationParams {
     ///   Body     (default) a body force per particle from the magnets' field gradient,
     ///            mu0 M_f(|H_magnets|) grad |H_magnets|: with `external` M_f is the Langevin
     ///            law, with a self-consistent solver a curve fitted at each solve so that its
-    ///            potential along the free surface is the surface's F(H) + M_n^2 / 2, normal
-    ///            traction included (sim/magnetics/DemagnetizationCurve.hpp).
+    ///            potential at surface samples (curve_fit, below) is their F(H) + M_n^2 / 2,
+    ///            normal traction included (sim/magnetics/DemagnetizationCurve.hpp).
     ///   Surface  (experimental) the Kelvin force density mu0 (M . grad) H of the TOTAL
     ///            field, which for M parallel to H is the gradient of the magnetic pressure
     ///            mu0 F(H), taken into the pressure: what remains is a pressure on the free
