@@ -206,6 +206,19 @@ void FluidMagnetics::solve(const std::vector<Vec3>& x, const std::function<Surfa
     stats_.residual = std::max(stats_.residual, st.residual);
 }
 
+FluidMagnetics::SurfacePoint FluidMagnetics::surfacePoint(size_t i, const Vec3& x, const Vec3d& outward) const {
+    // At the fluid's surface, half a spacing outside the particle centre (a particle stands
+    // for the cube of fluid around it; the surface mesh is placed there too): the applied
+    // field there plus the particle's own induced field, and M from the law.
+    const double chi0 = law_.susceptibility, Ms = law_.saturation;
+    const Vec3d xs = x.cast<double>() + 0.5 * spacing_ * outward;
+    const Vec3d applied = magnetField(magnets_, xs);
+    const Vec3d Hs = applied + (H_[i] - Hext_[i]).cast<double>();
+    const double h = Hs.norm();
+    const double Mn = h > 0 ? langevinMagnetization(h, chi0, Ms) * Hs.dot(outward) / h : 0.0;
+    return {applied.norm(), langevinEnergy(h, chi0, Ms), 0.5 * Mn * Mn};
+}
+
 std::vector<DemagnetizationCurve::SurfaceSample> FluidMagnetics::surfaceSamples(const std::vector<Vec3>& x,
                                                                                const SurfaceView& view) const {
     // The free surface: particles whose colour gradient is at least half a flat surface's
@@ -221,20 +234,14 @@ std::vector<DemagnetizationCurve::SurfaceSample> FluidMagnetics::surfaceSamples(
     std::vector<DemagnetizationCurve::SurfaceSample> out;
     const size_t n = x.size();
     if (!view.colorGradient || !view.exposure || view.colorGradient->size() != n || view.exposure->size() != n) return out;
-    const double chi0 = law_.susceptibility, Ms = law_.saturation;
     for (size_t i = 0; i < n; ++i) {
         const Vec3d g = (*view.colorGradient)[i].cast<double>();
         const double gn = g.norm();
         if (!(gn > 0)) continue;
         const double weight = surfaceWeight(gn) * double((*view.exposure)[i]);
         if (!(weight >= 0.5)) continue;
-        const Vec3d outward = -g / gn;
-        const Vec3d xs = x[i].cast<double>() + 0.5 * spacing_ * outward;
-        const Vec3d applied = magnetField(magnets_, xs);
-        const Vec3d Hs = applied + Hind_[i].cast<double>();
-        const double hs = Hs.norm();
-        const double Mn = hs > 0 ? langevinMagnetization(hs, chi0, Ms) * Hs.dot(outward) / hs : 0.0;
-        out.push_back({applied.norm(), langevinEnergy(hs, chi0, Ms) + 0.5 * Mn * Mn, weight});
+        const SurfacePoint p = surfacePoint(i, x[i], -g / gn);
+        out.push_back({p.applied, p.energy + p.traction, weight});
     }
     return out;
 }
@@ -348,22 +355,14 @@ void FluidMagnetics::computeSurfacePressure(const std::vector<Vec3>& x, const st
                                             const std::vector<Real>& exposure) {
     // p_s = C - mu0 (F(H) + M_n^2 / 2) pushed along grad c on surface particles (header).
     const size_t n = gradC.size();
-    const double chi0 = law_.susceptibility, Ms = law_.saturation;
     std::vector<double> psi(n, 0.0), weight(n, 0.0);
     forEachParticle(n, [&](size_t i) {
         const Vec3d g = gradC[i].cast<double>();
         const double gn = g.norm();
         weight[i] = surfaceWeight(gn) * double(exposure[i]);
         if (weight[i] <= 0) return;
-        // At the fluid's surface, half a spacing outside the particle centre (a particle
-        // stands for the cube of fluid around it; the surface mesh is placed there too):
-        // the applied field there plus the particle's own induced field, and M from the law.
-        const Vec3d outward = -g / gn;
-        const Vec3d xs = x[i].cast<double>() + 0.5 * spacing_ * outward;
-        const Vec3d Hs = magnetField(magnets_, xs) + (H_[i] - Hext_[i]).cast<double>();
-        const double h = Hs.norm();
-        const double Mn = h > 0 ? langevinMagnetization(h, chi0, Ms) * Hs.dot(outward) / h : 0.0;
-        psi[i] = kMu0 * (langevinEnergy(h, chi0, Ms) + (traction_ ? 0.5 * Mn * Mn : 0.0));
+        const SurfacePoint p = surfacePoint(i, x[i], -g / gn);
+        psi[i] = kMu0 * (p.energy + (traction_ ? p.traction : 0.0));
     });
     // C from the particles that are surely surface (w >= 1/2): a particle that only just
     // counts (a gap opening inside a moving fluid) would otherwise set the pressure level

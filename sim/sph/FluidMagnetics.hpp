@@ -171,6 +171,14 @@ public:
 private:
     bool solveIsStale() const;
     void solve(const std::vector<Vec3>& x, const std::function<SurfaceView()>& surface, bool forced);
+    /// The Bernoulli law's magnetic side at particle i's surface point, half a spacing out
+    /// from `x` along the unit `outward` normal: the applied field's strength there [A/m],
+    /// F(H) and M_n^2 / 2 [A^2/m^2] with H = applied + the particle's induced field, M its
+    /// Langevin law. Shared by the surface model and the free-surface curve fit.
+    struct SurfacePoint {
+        double applied = 0, energy = 0, traction = 0;
+    };
+    SurfacePoint surfacePoint(size_t i, const Vec3& x, const Vec3d& outward) const;
     /// The DemagnetizationCurve's samples: the free surface's magnetic pressure (see solve()).
     std::vector<DemagnetizationCurve::SurfaceSample> surfaceSamples(const std::vector<Vec3>& x, const SurfaceView& view) const;
     void applyLaw();

@@ -8,9 +8,31 @@
 #include <algorithm>
 #include <cmath>
 #include <random>
+#include <tuple>
 #include <vector>
 
 using namespace ferro;
+
+namespace {
+
+/// 401 field strengths log-spaced over [lo, hi] with the particles' M at r = 1 (the plain
+/// Langevin law) and surface samples whose pressure is `pressure(h)` plus a constant offset:
+/// volume data that disagrees with the surface, for the fits that must follow the surface.
+template <class Pressure>
+std::tuple<std::vector<double>, std::vector<double>, std::vector<DemagnetizationCurve::SurfaceSample>>
+disagreeingSamples(double lo, double hi, double chi0, double Ms, const Pressure& pressure) {
+    std::vector<double> h, m;
+    std::vector<DemagnetizationCurve::SurfaceSample> surface;
+    for (int i = 0; i <= 400; ++i) {
+        const double v = lo * std::pow(hi / lo, i / 400.0);
+        h.push_back(v);
+        m.push_back(langevinMagnetization(v, chi0, Ms));   // r = 1 in the volume
+        surface.push_back({v, pressure(v) + 1234.5, 1.0});
+    }
+    return {h, m, surface};
+}
+
+} // namespace
 
 TEST_CASE("a demagnetization ratio that is a function of h is recovered exactly", "[magnetics][demagnetization]") {
     // r(h) linear in log h between 1 kA/m (0.4) and 100 kA/m (0.9): the curve's own shape.
@@ -90,14 +112,7 @@ TEST_CASE("surface samples make the force's potential the surface pressure up to
         }
         exact.fit(h, m);
     }
-    std::vector<double> h, m;
-    std::vector<DemagnetizationCurve::SurfaceSample> surface;
-    for (int i = 0; i <= 400; ++i) {
-        const double v = lo * std::pow(hi / lo, i / 400.0);
-        h.push_back(v);
-        m.push_back(langevinMagnetization(v, chi0, Ms));   // r = 1 in the volume
-        surface.push_back({v, exact.potential(v) + 1234.5, 1.0});
-    }
+    const auto [h, m, surface] = disagreeingSamples(lo, hi, chi0, Ms, [&](double v) { return exact.potential(v); });
     DemagnetizationCurve curve(chi0, Ms);
     curve.fit(h, m, surface);
     const double range = exact.potential(hi) - exact.potential(lo);
@@ -136,14 +151,7 @@ TEST_CASE("the free-surface fit: the force's potential is the samples' pressure 
         for (int i = 1; i < steps; ++i) sum += (i % 2 ? 4 : 2) * f(a + i * dt);
         return sum * dt / 3;
     };
-    std::vector<double> h, m;
-    std::vector<DemagnetizationCurve::SurfaceSample> surface;
-    for (int i = 0; i <= 400; ++i) {
-        const double v = lo * std::pow(hi / lo, i / 400.0);
-        h.push_back(v);
-        m.push_back(langevinMagnetization(v, chi0, Ms));   // r = 1 in the volume
-        surface.push_back({v, reference(v) + 1234.5, 1.0});
-    }
+    const auto [h, m, surface] = disagreeingSamples(lo, hi, chi0, Ms, reference);
     DemagnetizationCurve curve(chi0, Ms);
     curve.fit(h, m, surface, DemagnetizationCurve::Fit::FreeSurface);
     REQUIRE(curve.fittedToSurface());
