@@ -3,6 +3,7 @@
 #include "sim/magnetics/MagnetState.hpp"
 #include "sim/sph/FluidSimulation.hpp"
 
+#include <cmath>
 #include <sstream>
 
 namespace ferro {
@@ -48,6 +49,12 @@ ParticleTable frameTable(const FluidSimulation& sim, int frame, const std::strin
     writeMagnetComments(t, sim.magnetsNow(), &sim.scene().magnetization);
     if (sim.magnetizationInterval() > 0)
         t.setComment("magnetization_interval", std::to_string(sim.magnetizationInterval()));
+    if (const auto c = sim.magnetizationCurve()) {
+        std::string line;
+        for (double d : {c->fit.hLo, c->fit.hHi, c->fit.c[0], c->fit.c[1], c->fit.c[2], c->fit.C, c->time})
+            line += (line.empty() ? "" : " ") + num(d);
+        t.setComment("magnetization_curve", line);
+    }
     return t;
 }
 
@@ -60,6 +67,20 @@ FrameState frameState(const ParticleTable& t) {
     if (t.column("hx") >= 0 && t.column("mx") >= 0) {
         s.H = t.vec3("hx", "hy", "hz");
         s.M = t.vec3("mx", "my", "mz");
+    }
+    if (const std::string line = t.comment("magnetization_curve"); !line.empty()) {
+        std::istringstream in(line);
+        double d[7];
+        for (double& v : d)
+            if (!(in >> v) || !std::isfinite(v))
+                throw ParticleFileError("magnetization_curve comment '" + line + "': expected seven finite numbers");
+        DemagnetizationCurve::SurfaceFit f;
+        f.hLo = d[0];
+        f.hHi = d[1];
+        for (int k = 0; k < 3; ++k) f.c[k] = d[2 + k];
+        f.C = d[5];
+        s.curve = f;
+        s.curveTime = d[6];
     }
     return s;
 }

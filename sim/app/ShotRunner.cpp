@@ -127,6 +127,7 @@ void runShot(const SimScene& scene, const RunOptions& opt) {
         const FrameState state = frameState(t);
         sim.setState(*it / fps, state.x, state.v, state.p, state.H, state.M);
         sim.setMagnetizationInterval(size_t(t.commentNumber("magnetization_interval", 0)));
+        if (state.curve) sim.setMagnetizationCurve({*state.curve, state.curveTime});
         frame = *it;
         resumed = true;
         break;
@@ -152,8 +153,11 @@ void runShot(const SimScene& scene, const RunOptions& opt) {
             po.sceneFingerprint = opt.prerollFingerprint.empty() ? opt.fingerprint : opt.prerollFingerprint;
             po.quiet = opt.quiet;
             po.particles = sim.size();
-            const FrameState settled = settleInitialState(scene, po).state;
+            const PrerollState preroll = settleInitialState(scene, po);
+            const FrameState& settled = preroll.state;
             sim.setState(0.0, settled.x, settled.v, settled.p, settled.H, settled.M);
+            // The pre-roll's clock ended at preroll.simulated; the shot's starts at 0.
+            if (settled.curve) sim.setMagnetizationCurve({*settled.curve, settled.curveTime - preroll.simulated});
         }
         writeParticleFile(particleFramePath(opt.outDir, 0), frameTable(sim, 0, opt.fingerprint));
     }

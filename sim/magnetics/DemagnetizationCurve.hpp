@@ -29,15 +29,21 @@
 //    at 1.5, the heap too tall (tests/sim/sph/test_FluidMagnetics.cpp).
 //  - Fit::FreeSurface: samples on the free surface (FluidMagnetics::surfaceSamples), and
 //    r(h) = c0 + c1 l + c2 l^2, l = log(h_c / h_ref), h_c = h clamped to the samples' range
-//    (their 2nd to 98th percentile), least squares of G(h_s) - C = P_s over the samples alone
-//    (at least kMinSurfaceSamples; fewer fall back to the nodes without samples). A low-order
+//    (their 2nd to 98th percentile), least squares of G(h_s) - C = P_s over the samples alone,
+//    C free (at least kMinSurfaceSamples; fewer fall back to the nodes without samples). With
+//    a memory m in [0, 1) the targets are m (G_last(h_s) - C_last) + (1 - m) P_s: the curve
+//    moves towards each solve's surface instead of jumping to it (the simulation sets m from
+//    the time since the last fit, FluidMagnetics::kCurveMemory; with C free and no memory a
+//    pool at chi0 1.5 sloshed at 10.8 mm/s, the samples' particles shuffling). A low-order
 //    curve on purpose: a curve free enough to follow each ring of the surface (16 nodes) let
 //    the traction feed the shape ring by ring and a pool at chi0 1.5 rippled; the fit is
 //    continuous in the samples (a node range that jumped with the samples' extent pumped a
 //    pool at 9 mm/s). r is not clamped at zero: where the surface pressure falls as h rises
 //    (a surface the field runs along), so does G. Resting pools meet the law within
-//    10-13 % (chi0 0.5) and 15-24 % (1.5) at 2,560 particles, 4.3 % and 12.8 % at 10,240.
+//    4.4 % (chi0 0.5) and 4.5 % (1.5) of the centre rise at 10,240 particles; at 2,560 the
+//    suite reads 9.5 % (0.5) and 5.6-32 % (1.5, WCSPH-DFSPH) (tests/sim/sph/test_FluidMagnetics.cpp).
 // Deterministic (sequential sums in the given order).
+#include <optional>
 #include <vector>
 
 namespace ferro {
@@ -67,10 +73,26 @@ public:
     /// particles, and G(h_s) - C = P_s at the `surface` samples at a tenth of their weight.
     /// Fit::FreeSurface: with kMinSurfaceSamples usable samples or more, G from the samples
     /// alone (the particles only give residual()); with fewer, Fit::Nodes without samples.
+    /// `memory` in [0, 1) (Fit::FreeSurface only): when the last fit was a surface fit too,
+    /// each sample's target is memory x (the last curve's G(h_s) - C) + (1 - memory) x P_s,
+    /// so the curve moves towards the surface's pressure by 1 - memory per fit instead of
+    /// jumping to each solve's samples (see the header comment).
     void fit(const std::vector<double>& h, const std::vector<double>& mAlong,
-             const std::vector<SurfaceSample>& surface = {}, Fit how = Fit::Nodes);
+             const std::vector<SurfaceSample>& surface = {}, Fit how = Fit::Nodes, double memory = 0);
     /// G(h) = integral_0^h M_f(h') dh' [A^2/m^2]: mu0 G / rho0 is the body force's potential.
     double potential(double h) const;
+
+    /// What a free-surface fit is: r(h) = c0 + c1 l + c2 l^2, l = log(h_c / sqrt(hLo hHi)),
+    /// h_c = h clamped to [hLo, hHi] [A/m], and the constant C [A^2/m^2] of G(h_s) - C = P_s.
+    /// Carried in the particle files so that a resumed run continues the same curve.
+    struct SurfaceFit {
+        double hLo = 0, hHi = 0, c[3] = {1, 0, 0}, C = 0;
+    };
+    /// The last fit when it was a free-surface fit.
+    std::optional<SurfaceFit> surfaceFit() const;
+    /// Makes `f` the current curve, as if a free-surface fit had just found it. Returns false
+    /// (and changes nothing) unless 0 < hLo <= hHi and every number is finite.
+    bool restoreSurfaceFit(const SurfaceFit& f);
 
     /// True once fit() has been called.
     bool fitted() const { return fitted_; }
@@ -93,7 +115,9 @@ private:
     void fitNodes(const std::vector<double>& h, const std::vector<double>& mAlong,
                   const std::vector<SurfaceSample>& surface);
     // The surface fit.
-    bool fitSurface(const std::vector<SurfaceSample>& surface);
+    bool fitSurface(const std::vector<SurfaceSample>& surface, double memory);
+    /// The table of Phi_k over [hLo_, hHi_] (hRef_ their geometric mean).
+    void tabulateSurface();
     /// Phi_k(h) = integral_0^h l(h')^k M_law(h') dh', k = 0..2, from the table over [hLo, hHi].
     void surfaceBasis(double h, double phi[3]) const;
 
@@ -105,6 +129,7 @@ private:
     std::vector<double> r_;
     bool surface_ = false;
     double coef_[3] = {1, 0, 0};  // surface: r = c0 + c1 l + c2 l^2
+    double constant_ = 0;         // surface: C
     double hLo_ = 1, hHi_ = 1, hRef_ = 1;
     static constexpr int kSurfaceSteps = 4096;   // fine enough that dG/dh is M_f within 0.1 %
     std::vector<double> surfaceTable_;   // surface: Phi_k at kSurfaceSteps + 1 points over [hLo, hHi]

@@ -69,11 +69,11 @@ struct MagnetizationParams {
     ///                at rest the floor and walls. Resting pools miss the Bernoulli law by
     ///                13 % of the heap's rise at chi0 0.5, 39-44 % at 1.5 (too tall).
     ///   FreeSurface  the free surface's F(H) + M_n^2 / 2 (colour gradient and exposure,
-    ///                half a spacing out): 10-13 % / 15-24 % at 2,560 particles, 4.3 / 12.8 %
-    ///                at 10,240; heaps 35-50 % lower than Boundary's. Not the default yet:
-    ///                each solve refits the curve to a surface whose particles shuffle, and
-    ///                the heap keeps moving (the still-magnet spike tips of issue 14 matched
-    ///                97.8 % frame to frame instead of 99.6 %, under the 98 % asked).
+    ///                half a spacing out), each fit averaged with the last over 0.1 s:
+    ///                4.4 / 4.5 % at 10,240 particles, 9.5 / 5.6-32 % at 2,560; heaps lower
+    ///                than Boundary's. Not the default yet: the lower, wider heap's spike
+    ///                tips over a still magnet (issue 14) matched 96.5 % frame to frame
+    ///                instead of 99.6 %, under the 98 % asked.
     enum class CurveFit { Boundary, FreeSurface };
     Force force = Force::Body;
     CurveFit curveFit = CurveFit::Boundary;

@@ -10,6 +10,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 
 namespace ferro {
 
@@ -172,7 +173,11 @@ void FluidMagnetics::solve(const std::vector<Vec3>& x, const std::function<Surfa
         // that a surface at rest obeys the ferrohydrostatic Bernoulli law
         // (DemagnetizationCurve.hpp; MagnetizationParams::CurveFit).
         if (law_.curveFit == MagnetizationParams::CurveFit::FreeSurface) {
-            curve_.fit(h, along, surfaceSamples(x, surface()), DemagnetizationCurve::Fit::FreeSurface);
+            // The curve's memory (kCurveMemory): each fit moves the last curve towards this
+            // solve's surface by 1 - exp(-dt / kCurveMemory), dt the time since the last fit.
+            const double memory = curveFitTime_ <= time_ ? std::exp(-(time_ - curveFitTime_) / kCurveMemory) : 0.0;
+            curve_.fit(h, along, surfaceSamples(x, surface()), DemagnetizationCurve::Fit::FreeSurface, memory);
+            curveFitTime_ = time_;
         } else {
             // The solve's own surface weights (the dipole kernel at least a fifth empty): on
             // a resting pool the floor and the walls, not the free surface (0 of ~490 samples
@@ -257,6 +262,7 @@ void FluidMagnetics::update(double t, const std::vector<Vec3>& x, const SurfaceP
         return view;
     };
     const size_t n = x.size();
+    time_ = t;
     magnets_ = softenedMagnetsAt(t);
     Hext_.resize(n);
     H_.resize(n, Vec3::Zero());
@@ -391,10 +397,23 @@ void FluidMagnetics::permute(const std::vector<uint32_t>& order) {
     ferro::permute(HextSolved_, order);
 }
 
+std::optional<FluidMagnetics::CurveMemory> FluidMagnetics::curveMemory() const {
+    const std::optional<DemagnetizationCurve::SurfaceFit> f = curve_.surfaceFit();
+    if (!f) return std::nullopt;
+    return CurveMemory{*f, curveFitTime_};
+}
+
+void FluidMagnetics::setCurveMemory(const CurveMemory& c) {
+    if (std::isfinite(c.time) && curve_.restoreSurfaceFit(c.fit)) curveFitTime_ = c.time;
+}
+
 void FluidMagnetics::setState(const std::vector<Vec3>& H, const std::vector<Vec3>& M) {
     H_ = H;
     M_ = M;
     solved_ = false;
+    // The curve was fitted to another state's surface: the next fit starts afresh unless
+    // setCurveMemory() brings back the curve that belongs to this state.
+    curveFitTime_ = -std::numeric_limits<double>::infinity();
 }
 
 } // namespace ferro

@@ -31,8 +31,9 @@
 //   which samples: "boundary" (default) the solve's own surface weights, at rest the floor
 //   and walls (resting pools 13 % off the law at chi0 0.5, 39-44 % at 1.5); "free_surface"
 //   half a spacing outside the free-surface particles (colour gradient and exposure, as the
-//   surface model finds them: surfaceSamples()): 10-13 % and 15-24 % on a 2,560-particle
-//   pool, 4.3 % and 12.8 % on 10,240 (tests/sim/sph/test_FluidMagnetics.cpp).
+//   surface model finds them: surfaceSamples()), each fit leaning on the last (kCurveMemory):
+//   4.4 % and 4.5 % on a 10,240-particle pool, 9.5 % and 5.6-32 % on 2,560
+//   (tests/sim/sph/test_FluidMagnetics.cpp).
 // - magnetization.force = "surface" (experimental): the Kelvin force density of the TOTAL
 //   field, mu0 (M . grad) H, is for M parallel to H and curl H = 0 exactly grad(mu0 F(H))
 //   (Rosensweig, Ferrohydrodynamics, ch. 5); across the free surface the same density,
@@ -73,6 +74,7 @@
 
 #include <algorithm>
 #include <functional>
+#include <optional>
 #include <memory>
 #include <string>
 #include <vector>
@@ -150,7 +152,8 @@ public:
     /// Total field H [A/m] and magnetization M [A/m] in the current order (empty if inactive).
     const std::vector<Vec3>& field() const { return H_; }
     const std::vector<Vec3>& magnetization() const { return M_; }
-    /// Warm start for a resumed run: H and M in the current order.
+    /// Warm start for a resumed run: H and M in the current order. Forgets the curve's
+    /// memory (the next fit starts afresh) unless setCurveMemory() follows.
     void setState(const std::vector<Vec3>& H, const std::vector<Vec3>& M);
 
     /// Steps one solve of the induced field may currently serve (the measured re-solve
@@ -158,6 +161,16 @@ public:
     /// same steps as an uninterrupted one.
     size_t resolveInterval() const { return interval_; }
     void setResolveInterval(size_t steps) { interval_ = std::clamp<size_t>(steps, 1, kMaxInterval); }
+    /// The free-surface curve (magnetization.curve_fit = "free_surface") and the time [s] of
+    /// its last fit: each fit leans on the last one (the curve's memory, see solve()), so a
+    /// resumed run carries both in the particle files to continue exactly.
+    struct CurveMemory {
+        DemagnetizationCurve::SurfaceFit fit;
+        double time = 0;
+    };
+    std::optional<CurveMemory> curveMemory() const;
+    /// Restores a curve read from a particle file; ignored when it is not a valid curve.
+    void setCurveMemory(const CurveMemory& c);
 
     const MagneticsStats& stats() const { return stats_; }
     void resetCounters() {
@@ -202,6 +215,12 @@ private:
     DemagnetizationCurve curve_;             // M along H_magnets against |H_magnets|, fitted at each solve
     std::vector<Vec3> HextSolved_;           // applied field at the last solve, current order
     static constexpr size_t kMaxInterval = 200;
+    // The free-surface curve's memory [s]: the time over which its fits average the surface.
+    // Without it a fit follows each solve's samples, whose particles shuffle, and with the
+    // constant C free (as the law has it) a pool at chi0 1.5 sloshed at 10.8 mm/s; with 0.1 s
+    // it rests (0.45-0.84 mm/s). The price: after a change of the field the curve lags its
+    // surface by about this time (three frames at 30 fps).
+    static constexpr double kCurveMemory = 0.1;
     size_t interval_ = 1;                    // steps a solve may serve (measured, see solve())
     double inducedShare_ = 0;                // rms |H_ind| / rms |H| at the last solve
     double kelvinShare_ = 1;                 // rms Kelvin acceleration / (its max with gravity)
@@ -210,6 +229,8 @@ private:
     double inducedScale_ = 1;                // rms |H_ext| now / at the last solve
     double lastFieldError_ = 0;              // the last solve's estimated relative field error
     size_t stepsSinceSolve_ = 0;
+    double time_ = 0;                        // of the last update [s]
+    double curveFitTime_ = 0;                // of the curve's last free-surface fit [s]
     bool solved_ = false;
     MagneticsStats stats_;
 };

@@ -21,6 +21,7 @@
 #include "sim/scene/SimParams.hpp"
 
 #include <memory>
+#include <optional>
 #include <stdexcept>
 #include <vector>
 
@@ -114,6 +115,12 @@ public:
     /// The magnetization re-solve interval (see FluidMagnetics), 0 without magnetics.
     size_t magnetizationInterval() const { return magnetics_ ? magnetics_->resolveInterval() : 0; }
     void setMagnetizationInterval(size_t steps) { if (magnetics_ && steps > 0) magnetics_->setResolveInterval(steps); }
+    /// The force's free-surface curve and the time of its last fit (see FluidMagnetics), none
+    /// without one; carried in the particle files for an exact resume.
+    std::optional<FluidMagnetics::CurveMemory> magnetizationCurve() const {
+        return magnetics_ ? magnetics_->curveMemory() : std::nullopt;
+    }
+    void setMagnetizationCurve(const FluidMagnetics::CurveMemory& c) { if (magnetics_) magnetics_->setCurveMemory(c); }
     /// The magnets at the current time as the particles feel them (softened over at least
     /// one spacing; empty without magnets).
     std::vector<Magnet> magnetsNow() const;
