@@ -398,8 +398,10 @@ void FluidMagnetics::permute(const std::vector<uint32_t>& order) {
 }
 
 std::optional<FluidMagnetics::CurveMemory> FluidMagnetics::curveMemory() const {
+    // A curve whose memory setState() dropped is nothing to carry: the next fit starts
+    // afresh, in this run and in one resumed from its file alike.
     const std::optional<DemagnetizationCurve::SurfaceFit> f = curve_.surfaceFit();
-    if (!f) return std::nullopt;
+    if (!f || !std::isfinite(curveFitTime_)) return std::nullopt;
     return CurveMemory{*f, curveFitTime_};
 }
 

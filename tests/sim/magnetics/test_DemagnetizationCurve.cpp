@@ -187,8 +187,8 @@ TEST_CASE("the free-surface fit: the force's potential is the samples' pressure 
 
 TEST_CASE("the free-surface curve's memory blends fits, and a restored curve is the same curve", "[magnetics][demagnetization]") {
     // Two surfaces with known ratios (quadratic in log h, so each is exactly a free-surface
-    // curve) over the same field strengths, pressures from the trapezoid-free reference
-    // integral of each (Simpson, as above) with different constants.
+    // curve) over the same field strengths, pressures from a reference integral of each
+    // that is independent of the curve's tables (Simpson, as above), with different constants.
     const double chi0 = 1.5, Ms = 35000, lo = 2e3, hi = 5e4;
     const double span = std::log(hi / lo);
     auto integral = [&](auto r, double h) {

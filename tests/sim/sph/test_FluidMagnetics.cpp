@@ -17,6 +17,7 @@
 #include <cmath>
 #include <filesystem>
 #include <map>
+#include <sstream>
 #include <sys/wait.h>
 #include <unistd.h>
 
@@ -682,6 +683,37 @@ TEST_CASE("particle files carry H, M and the magnets at the frame's time, and re
         REQUIRE(r.output.find("magnetization_curve") != std::string::npos);
         REQUIRE(std::count(r.output.begin(), r.output.end(), '\n') <= 1);
         REQUIRE_FALSE(fs::exists(dir / "part" / "particles_0005.ply"));
+        // After a pre-roll, frame 0 carries the pre-roll's curve, its fit time on the shot's
+        // clock (the pre-roll ends at t = 0): the first frame's fit leans on it.
+        const std::string pre = common + (dir / "pre").string() + " --max-frames 0";
+        REQUIRE(std::system((pre.substr(0, pre.find(" --quiet")) + " --set shot.preroll=0.1" + pre.substr(pre.find(" --quiet"))).c_str()) == 0);
+        const ParticleTable f0 = readParticleFile((dir / "pre" / "particles_0000.ply").string());
+        const ParticleTable cache = readParticleFile((dir / "pre" / "preroll.ply").string());
+        auto numbers = [](const std::string& line) {
+            std::istringstream in(line);
+            std::vector<double> v(7);
+            for (double& d : v) REQUIRE(in >> d);
+            return v;
+        };
+        CAPTURE(f0.comment("magnetization_curve"), cache.comment("magnetization_curve"));
+        const std::vector<double> frame0 = numbers(f0.comment("magnetization_curve"));
+        const std::vector<double> settled = numbers(cache.comment("magnetization_curve"));
+        const double preroll = cache.commentNumber("preroll_time", 0);
+        REQUIRE(preroll > 0.05);
+        for (int k = 0; k < 6; ++k) REQUIRE(frame0[size_t(k)] == settled[size_t(k)]);
+        REQUIRE(frame0[6] == Approx(settled[6] - preroll).margin(1e-12));
+        REQUIRE(settled[6] > 0);
+        // A pre-roll cache without the curve (written before 2026-12-02): frame 0 carries none
+        // (the first fit starts afresh), and a run resumed from frame 0 goes on.
+        ParticleTable old = cache;
+        old.setComment("magnetization_curve", "");
+        writeParticleFile((dir / "old.ply").string(), old);
+        const std::string fromOld = pre.substr(0, pre.find(" --quiet")) + " --set shot.preroll=0.1 --preroll-cache " +
+                                    (dir / "old.ply").string() + " --quiet --out " + (dir / "old").string();
+        REQUIRE(std::system((fromOld + " --max-frames 0").c_str()) == 0);
+        REQUIRE(readParticleFile((dir / "old" / "particles_0000.ply").string()).comment("magnetization_curve").empty());
+        REQUIRE(std::system((fromOld + " --max-frames 1 --resume").c_str()) == 0);
+        REQUIRE_FALSE(readParticleFile((dir / "old" / "particles_0001.ply").string()).comment("magnetization_curve").empty());
     }
     fs::remove_all(dir);
 }
