@@ -62,7 +62,7 @@ WettedWall findWettedWall(const TriangleMesh& mesh, const SurfaceFields& fields,
     std::vector<Vec3d> wettedPoints;
     for (size_t v = 0; v < n; ++v)
         if (wetted[v]) wettedPoints.push_back(toD(mesh.vertices[v]));
-    const double wallFade = P.wallFade > 0 ? P.wallFade : 0.5 * minSpacing;
+    const double wallFade = P.wallFade > 0 ? P.wallFade : minSpacing;
     return WettedWall{std::move(wetted), PointGrid(wettedPoints, wallFade), wallFade};
 }
 

@@ -39,7 +39,7 @@ struct WettedWall {
 };
 
 /// The wetted vertices of `mesh` (SurfaceFields::wetted) and the fade distance: P.wallFade, or
-/// half of minSpacing [m] when that is 0.
+/// minSpacing [m] (the smallest tip spacing of the patterns) when that is 0.
 WettedWall findWettedWall(const TriangleMesh& mesh, const SurfaceFields& fields, const SpikeParams& P,
                           double minSpacing);
 

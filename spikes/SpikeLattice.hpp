@@ -49,8 +49,9 @@ struct Pattern {
 
 /// Phase 3, the tips of Fig. 7 for a pattern whose info (origin x0 and normal n0 on the free
 /// surface, axis e1, spacing l [m]) is set. From x0 the six lattice axes are traced along the
-/// surface with step l (eq. 15: each step along the tangent at the previous tip, the next tip
-/// where the field line through the stepped point meets the surface, within 0.75 l), for at
+/// surface with step l (eq. 15: each step along the tangent plane at the previous tip, that of
+/// the surface's mean normal within l / 2, the next tip where the field line through the
+/// stepped point meets the surface, within 0.75 l), for at
 /// most ceil(diagonal / l) + 1 rings [diagonal in m] and until two tips in a row are subcritical
 /// (|M| <= Mc [A/m]); tips between two axes interpolate the two n-th axis tips (Fig. 7c) and
 /// are dropped the same way. Fills pat.tips (each with its lattice map from its neighbours'

@@ -37,7 +37,11 @@ struct SpikeParams {
     double wallMargin = 0.0;         ///< surface closer than this to a container wall is wetted wall,
                                      ///< never spiky [m]; 0 = 1.5 particle spacings (2 mm if unknown)
     double wallFade = 0.0;           ///< height ramps in over this distance from the wetted wall [m];
-                                     ///< 0 = half the tip spacing
+                                     ///< 0 = one tip spacing l. Not l / 2: a ramp narrower than a
+                                     ///< spike tilts its peak off the lattice point, and the outer
+                                     ///< tips of a still magnet's pattern (issue 14's test with the
+                                     ///< free_surface fit, 55 tips reaching the wall fade) wandered
+                                     ///< 0.5-0.8 mm per frame with the mesh's wall distance
     double resolution = 16.0;        ///< target mesh edges per tip spacing in the spiky area, >= 3
     int remeshIterations = 3;        ///< CGAL isotropic remeshing iterations, >= 0 (0 = no refinement)
     double ambientDensity = 1.2;     ///< density of the medium above the fluid (air) [kg/m^3]
