@@ -95,7 +95,7 @@ MagnetizationParams parseMagnetization(const SceneDocument& doc)
                                 "\"surface\" (the total field and the normal traction, as a surface pressure)");
     const std::string force = r.choice("force", {"body", "surface"}, "body");
     p.force = force == "body" ? MagnetizationParams::Force::Body : MagnetizationParams::Force::Surface;
-    const std::string curveFit = r.choice("curve_fit", {"boundary", "free_surface"}, "boundary");
+    const std::string curveFit = r.choice("curve_fit", {"boundary", "free_surface"}, "free_surface");
     p.curveFit = curveFit == "boundary" ? MagnetizationParams::CurveFit::Boundary : MagnetizationParams::CurveFit::FreeSurface;
     r.finish();
     return p;

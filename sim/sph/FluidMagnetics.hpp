@@ -28,12 +28,13 @@
 //   fitted so that G along the surface is the ferrohydrostatic surface pressure
 //   F(H) + M_n^2 / 2 (normal traction included), so that a resting surface obeys the
 //   Bernoulli law rho g z_s = mu0 (F(H) + M_n^2 / 2) + C; magnetization.curve_fit says
-//   which samples: "boundary" (default) the solve's own surface weights, at rest the floor
-//   and walls (resting pools 13 % off the law at chi0 0.5, 39-44 % at 1.5); "free_surface"
-//   half a spacing outside the free-surface particles (colour gradient and exposure, as the
-//   surface model finds them: surfaceSamples()), each fit leaning on the last (kCurveMemory):
-//   4.4 % and 4.5 % on a 10,240-particle pool, 9.5 % and 5.6-32 % on 2,560
-//   (tests/sim/sph/test_FluidMagnetics.cpp).
+//   which samples: "free_surface" (default) half a spacing outside the free-surface
+//   particles (colour gradient and exposure, as the surface model finds them:
+//   surfaceSamples()), each fit leaning on the last (kCurveMemory): resting pools 4.4 % and
+//   4.5 % off the law (chi0 0.5, 1.5) on 10,240 particles, 9.5 % and 5.6-32 % on 2,560
+//   (tests/sim/sph/test_FluidMagnetics.cpp); "boundary" (the default until 2026-12-02) the
+//   solve's own surface weights, at rest the floor and walls (13 % at chi0 0.5, 39-44 % at
+//   1.5, heaps too tall).
 // - magnetization.force = "surface" (experimental): the Kelvin force density of the TOTAL
 //   field, mu0 (M . grad) H, is for M parallel to H and curl H = 0 exactly grad(mu0 F(H))
 //   (Rosensweig, Ferrohydrodynamics, ch. 5); across the free surface the same density,

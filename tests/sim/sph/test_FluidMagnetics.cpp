@@ -541,7 +541,10 @@ TEST_CASE("paper Fig. 9: the fluid heaps up over the approaching magnet", "[magn
     const double centre = surfaceHeight(sim.positionsById(), 0, 0, 0, 0.012);
     const double ring = surfaceHeight(sim.positionsById(), 0, 0, 0.03, 0.045);
     CAPTURE(s, centre0, ring0, centre, ring);
-    REQUIRE(centre > ring + 1.5 * s);   // a heap of several millimetres over the magnet
+    // A heap of millimetres over the magnet: 3.2 mm (1.44 s) with the free-surface curve fit,
+    // which keeps a resting pool to the Bernoulli law (the pool tests below); the boundary fit,
+    // 40 % too tall at chi0 1.5, made it over 1.5 s.
+    REQUIRE(centre > ring + 1.0 * s);
     REQUIRE(centre > centre0 + 0.5 * s);
     // (The rim is not checked: by the end the heap sloshes and the rim's level with it.)
 }
@@ -575,8 +578,10 @@ TEST_CASE("paper Fig. 11: two magnets, two heaps, no NaN", "[magnetics][slow]") 
     const double right = surfaceHeight(x, 0.025, 0, 0, 0.008);
     const double rim = surfaceHeight(x, 0, 0, 0.042, 0.05);
     CAPTURE(s, left, right, rim);
-    REQUIRE(left > rim + 0.5 * s);     // 1.5 A m^2: 1.7 mm at 2.2 mm spacing
-    REQUIRE(right > rim + 0.1 * s);    // 1.0 A m^2: 0.6 mm
+    // With the free-surface curve fit (the heaps of the Bernoulli law, see Fig. 9) 1.5 A m^2
+    // heaps 0.8 mm at 2.2 mm spacing, 1.0 A m^2 0.4 mm (the boundary fit: 1.7 and 0.6 mm).
+    REQUIRE(left > rim + 0.25 * s);
+    REQUIRE(right > rim + 0.1 * s);
     REQUIRE(left > right);             // the stronger magnet makes the taller heap
 }
 
