@@ -120,10 +120,10 @@ bool alive(const TraceFrame& f, const Vec3d& s, const Vec3d& n)
 }
 
 // Fig. 7b: adds the origin tip and traces the six axes from x0 along the surface with step l
-// (eq. 15: along the tangent at the previous tip), at most maxRings tips per axis, until two
-// subcritical tips in a row after a supercritical one (a subcritical origin, the top of a
-// heap less magnetized than its flanks, does not end the axis). Returns per axis k the
-// traced points, x0 first [m].
+// (eq. 15: along the tangent plane of the mean normal at the previous tip, SmoothNormals), at
+// most maxRings tips per axis, until two subcritical tips in a row after a supercritical one
+// (a subcritical origin, the top of a heap less magnetized than its flanks, does not end the
+// axis). Returns per axis k the traced points, x0 first [m].
 void traceAxes(const TraceFrame& f, int maxRings, LatticeTips& lattice, std::vector<Vec3d> (&axisTips)[6])
 {
     const double l = f.l;
@@ -135,7 +135,7 @@ void traceAxes(const TraceFrame& f, int maxRings, LatticeTips& lattice, std::vec
         int dead = 0;
         bool lived = alive(f, f.x0, f.n0); // an axis ends two dead tips after its last live one
         for (int ring = 1; ring <= maxRings && dead < 2; ++ring) {
-            d = d - d.dot(n) * n; // eq. 15: step along the tangent at the previous tip
+            d = d - d.dot(n) * n; // eq. 15: step along the tangent plane at the previous tip
             if (!(d.norm() > 1e-12)) break;
             d.normalize();
             Vec3d next, nextNormal;
