@@ -39,7 +39,7 @@ public:
         const TriangleMesh& mesh = surface.mesh;
         std::vector<Vec3d> centroids;
         for (const auto& t : mesh.triangles) {
-            if (surface.wetted[t[0]] && surface.wetted[t[1]] && surface.wetted[t[2]]) continue;
+            if (!surface.isFree(t)) continue;
             const Vec3d a = toD(mesh.vertices[t[0]]), b = toD(mesh.vertices[t[1]]), c = toD(mesh.vertices[t[2]]);
             centroids.push_back((a + b + c) / 3.0);
             areaNormals_.push_back(0.5 * (b - a).cross(c - a));
@@ -226,8 +226,7 @@ bool nearestFreeHit(const FreeSurface& surface, const Vec3d& p, const Vec3d& d, 
 {
     for (const SurfaceRayCaster::Hit& h : surface.caster.lineHits(p, d)) {
         if (std::abs(h.t) > maxDistance) break;
-        const auto& t = surface.mesh.triangles[h.triangle];
-        if (surface.wetted[t[0]] && surface.wetted[t[1]] && surface.wetted[t[2]]) continue;
+        if (!surface.isFree(surface.mesh.triangles[h.triangle])) continue;
         hit = h.point;
         normal = faceNormal(surface.mesh, h.triangle);
         return true;

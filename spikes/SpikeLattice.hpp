@@ -9,6 +9,7 @@
 
 #include <Eigen/Dense>
 
+#include <array>
 #include <cstdint>
 #include <memory>
 #include <vector>
@@ -21,6 +22,8 @@ struct FreeSurface {
     const TriangleMesh& mesh;
     const SurfaceRayCaster& caster;
     const std::vector<char>& wetted; ///< per vertex of mesh: 1 = wetted wall
+    /// A triangle of mesh is free unless all three of its vertices are wetted wall.
+    bool isFree(const std::array<uint32_t, 3>& t) const { return !(wetted[t[0]] && wetted[t[1]] && wetted[t[2]]); }
 };
 
 /// Where the line through p along d (non-zero) meets the free surface nearest to p, if no
