@@ -44,6 +44,13 @@ ParticleTable frameTable(const FluidSimulation& sim, int frame, const std::strin
     t.setComment("rest_density", num(sim.restDensity()));
     t.setComment("scene", sim.scene().path);
     t.setComment("scene_fingerprint", fingerprint);
+    // The pressure solver over the steps that made this frame: steps, and per solve the
+    // steps that stopped at the iteration cap with the largest mean compression they left
+    // (DFSPH; zero for WCSPH, which has no iterations).
+    const SolverCapCount& caps = sim.frameSolverCaps();
+    t.setComment("solver_steps", std::to_string(caps.steps));
+    t.setComment("density_solve_at_cap", std::to_string(caps.densityAtCap) + " " + num(caps.densityError));
+    t.setComment("divergence_solve_at_cap", std::to_string(caps.divergenceAtCap) + " " + num(caps.divergenceError));
     // The magnets at this frame's time and the fluid's law: later stages evaluate the same
     // field anywhere from the file alone.
     writeMagnetComments(t, sim.magnetsNow(), &sim.scene().magnetization);

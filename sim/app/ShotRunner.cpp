@@ -53,6 +53,26 @@ std::vector<int> existingFrames(const std::string& dir) {
     return frames;
 }
 
+/// One line, once a run, when a frame's pressure solves keep stopping at the iteration cap
+/// (more than a tenth of its steps): the density they leave is then not the tolerance's.
+/// Printed in quiet runs too.
+void warnAboutSolverCap(const FluidSimulation& sim, int frame, bool& warned) {
+    const SolverCapCount& caps = sim.frameSolverCaps();
+    if (warned || 10 * caps.atCap() <= caps.steps) return;
+    warned = true;
+    const SolverParams& sp = sim.scene().solver;
+    const bool density = caps.densityAtCap >= caps.divergenceAtCap;
+    std::fprintf(stderr,
+                 "ferro-sim: warning: frame %d: the %s solve stopped at its iteration cap (sim.max_iterations = %d) in "
+                 "%zu of %zu steps, leaving a mean compression of up to %.3g %% against sim.%s = %.3g %%: raise "
+                 "sim.max_iterations or lower sim.max_dt\n",
+                 frame, density ? "density" : "divergence", sp.maxIterations,
+                 density ? caps.densityAtCap : caps.divergenceAtCap, caps.steps,
+                 100 * (density ? caps.densityError : caps.divergenceError),
+                 density ? "max_density_error" : "max_divergence_error",
+                 100 * (density ? sp.maxDensityError : sp.maxDivergenceError));
+}
+
 std::string magnetSummary(const FluidSimulation& sim) {
     const FluidMagnetics* fm = sim.magnetics();
     if (!fm) return {};
@@ -173,6 +193,7 @@ void runShot(const SimScene& scene, const RunOptions& opt) {
     const auto start = Clock::now();
     const size_t startSteps = sim.stepCount();
     const int firstFrame = frame;
+    bool capWarned = false;
     while (frame < lastFrame) {
         ++frame;
         const auto frameStart = Clock::now();
@@ -180,6 +201,7 @@ void runShot(const SimScene& scene, const RunOptions& opt) {
         sim.resetMagneticsCounters();
         sim.advanceTo(frame / fps);
         writeParticleFile(particleFramePath(opt.outDir, frame), frameTable(sim, frame, opt.fingerprint));
+        warnAboutSolverCap(sim, frame, capWarned);
         if (!opt.quiet) {
             const double now = std::chrono::duration<double>(Clock::now() - start).count();
             const double frameSec = std::chrono::duration<double>(Clock::now() - frameStart).count();
@@ -200,6 +222,14 @@ void runShot(const SimScene& scene, const RunOptions& opt) {
                     mag += buf;
                 }
             }
+            if (const SolverCapCount& caps = sim.frameSolverCaps(); caps.atCap() > 0) {
+                // Steps whose pressure solve stopped at its cap above the tolerance.
+                char buf[160];
+                std::snprintf(buf, sizeof buf, "  AT CAP p %zu d %zu of %zu steps (err up to %.3f%% / %.3f%%)",
+                              caps.densityAtCap, caps.divergenceAtCap, caps.steps, 100 * caps.densityError,
+                              100 * caps.divergenceError);
+                mag += buf;
+            }
             if (sim.implicitViscosity()) { // the implicit viscosity solve of the frame's last step
                 char buf[80];
                 std::snprintf(buf, sizeof buf, "  visc it %d (res %.1e)", st.viscosityIterations, st.viscosityResidual);
@@ -217,8 +247,13 @@ void runShot(const SimScene& scene, const RunOptions& opt) {
         const double wall = std::chrono::duration<double>(Clock::now() - start).count();
         // The sanity guard's margin: the fastest particle over the speed all of the scene's
         // energy would give one particle (the guard stops at SanityLimits::kSpeedSafety).
-        std::fprintf(stderr, "ferro-sim: done, %zu steps in %.1f s wall, max speed %.2f x the scene's energy speed %.3g m/s\n",
-                     sim.stepCount() - startSteps, wall, sim.maxSpeedRatio(), sim.speedBound().energySpeed());
+        const SolverCapCount& caps = sim.runSolverCaps();
+        std::string cap;
+        if (caps.atCap() > 0)
+            cap = ", " + std::to_string(caps.densityAtCap) + " density and " + std::to_string(caps.divergenceAtCap) +
+                  " divergence solves stopped at the iteration cap";
+        std::fprintf(stderr, "ferro-sim: done, %zu steps in %.1f s wall, max speed %.2f x the scene's energy speed %.3g m/s%s\n",
+                     sim.stepCount() - startSteps, wall, sim.maxSpeedRatio(), sim.speedBound().energySpeed(), cap.c_str());
     }
 }
 

@@ -20,6 +20,7 @@
 #include "sim/sph/SanityGuard.hpp"
 #include "sim/scene/SimParams.hpp"
 
+#include <algorithm>
 #include <memory>
 #include <optional>
 #include <stdexcept>
@@ -44,6 +45,22 @@ struct StepStats {
     size_t searches = 0;         ///< neighbour searches so far
     int viscosityIterations = 0; ///< implicit viscosity: CG iterations of the step (0 when explicit)
     double viscosityResidual = 0;///< implicit viscosity: relative residual the solve ended at
+    double divergenceError = 0;  ///< DFSPH: mean relative compression per step the divergence solve left
+    bool densityAtCap = false;   ///< the density solve stopped at sim.max_iterations above its tolerance
+    bool divergenceAtCap = false;///< the divergence solve stopped at sim.max_iterations above its tolerance
+};
+
+/// How often the pressure solver stopped at its iteration cap (sim.max_iterations) with
+/// its error still above the tolerance, over a span of steps (a frame, a run): never
+/// silent, the progress line, the frame file's header and the closing line show it.
+struct SolverCapCount {
+    size_t steps = 0;             ///< steps counted
+    size_t densityAtCap = 0;      ///< steps whose density solve ended at the cap
+    size_t divergenceAtCap = 0;   ///< steps whose divergence solve ended at the cap
+    double densityError = 0;      ///< largest mean relative compression a capped density solve left
+    double divergenceError = 0;   ///< largest mean relative compression per step a capped divergence solve left
+    void add(const StepStats& s);
+    size_t atCap() const { return std::max(densityAtCap, divergenceAtCap); }
 };
 
 class FluidSimulation {
@@ -60,6 +77,10 @@ public:
     const SimScene& scene() const { return scene_; }
     const Container& container() const { return *container_; }
     const StepStats& lastStep() const { return stats_; }
+    /// Steps that ended at the solver's iteration cap since the current frame started
+    /// (advanceTo resets it) and since the simulation was made.
+    const SolverCapCount& frameSolverCaps() const { return frameCaps_; }
+    const SolverCapCount& runSolverCaps() const { return runCaps_; }
     size_t stepCount() const { return steps_; }
     double soundSpeed() const { return soundSpeed_; }  ///< expected flow speed x 10 (WCSPH) [m/s]
     double particleVolume() const { return volume_; }   ///< V = m / rho0 [m^3]
@@ -225,6 +246,7 @@ private:
     double time_ = 0;
     size_t steps_ = 0;
     StepStats stats_;
+    SolverCapCount frameCaps_, runCaps_;
     SanityLimits limits_;
     SpeedBound speedBound_;
     double maxSpeedRatio_ = 0;
