@@ -1,7 +1,7 @@
 // Divergence-free SPH (Bender & Koschier 2017): a divergence solve keeps the velocity
 // field divergence-free, a constant-density solve corrects the predicted density, both
-// by relaxed Jacobi iterations on the pressure Poisson system, warm-started from 90 % of
-// the last step's pressures (kWarmStart). Steps are about ten times longer than WCSPH's.
+// by relaxed Jacobi iterations on the pressure Poisson system, warm-started. Steps are
+// about ten times longer than WCSPH's.
 #include "sim/sph/PressureSolver.hpp"
 
 #include "sim/core/ParticleLoops.hpp"
@@ -16,24 +16,6 @@ namespace {
 /// Fewer neighbours than this (fluid and wall) marks a particle near the free surface,
 /// where the divergence solve leaves it alone (SPlisHSPlasH's threshold for 3-D).
 constexpr uint32_t kDenseNeighborhood = 20;
-
-/// Both solves start from this fraction of the pressure the last step solved, at every
-/// particle of the dense interior (>= kDenseNeighborhood neighbours) and at sparse (free
-/// surface) particles only where the step would compress them. Why 0.9, measured on a
-/// settled pool of 10,777 particles at 0.75 mm over a 3 A m^2 dipole (the magnet's pull is
-/// 31 g at the floor; 0.2 s at the step of the force criterion):
-/// - SPlisHSPlasH's start, half the last pressure and only where the predicted density is
-///   above rest, drops the pressure of about half a resting interior (its predicted density
-///   hovers around rest), so every step rebuilds the hydrostatic pressure of the whole
-///   column: 62 Jacobi sweeps a step, the cap of 100 under a deeper heap.
-/// - A start at or near the full pressure lets the solve stop at its tolerance with the
-///   last step's pressure barely changed; where the fluid moved on, that stale pressure
-///   pushes harder than the constraint needs and does work (a lagged restoring force
-///   pumps energy): 0.98 ends at 16-27 mm/s RMS, 0.95 at 3.7-4.0 mm/s.
-/// - 0.9 rests as the half start does (0.82 mm/s after 0.2 s, the same to 0.02 mm/s) in
-///   17 sweeps a step; 0.75 takes 35. From below, what the tolerance leaves is
-///   compression, which does no work on the fluid.
-constexpr Real kWarmStart = 0.9;
 
 class DfsphSolver final : public PressureSolver {
 public:
@@ -161,8 +143,8 @@ void DfsphSolver::solveDivergence(double dt) {
         // Only compression is corrected, and not at the sparse free surface.
         if (neighborCount(i) < kDenseNeighborhood || div < 0) div = 0;
         source_[i] = -div;
-        // Warm start (kWarmStart) from the previous step's solution, stored times dt.
-        kappaV_[i] = div > 0 || neighborCount(i) >= kDenseNeighborhood ? kWarmStart * kappaV_[i] / Real(dt) : 0;
+        // Warm start from the previous step's solution (stored times dt).
+        kappaV_[i] = div > 0 ? Real(0.5) * std::min(kappaV_[i], Real(0.5)) / Real(dt) : 0;
     });
     const double eta = sim_.scene().solver.maxDivergenceError / dt;
     sim_.solverStats().divergenceIterations = relaxedJacobi(kappaV_, source_, dt, eta, 1, false);
@@ -176,6 +158,7 @@ void DfsphSolver::solveDivergence(double dt) {
 void DfsphSolver::solveDensity(double dt) {
     const size_t n = sim_.size();
     const Real rho0 = Real(sim_.restDensity());
+    const Real h2 = Real(dt * dt);
     std::vector<Vec3>& v = sim_.solverVelocities();
     std::vector<Real>& p = sim_.solverPressures();
     const std::vector<Real>& rho = sim_.densities();
@@ -196,10 +179,15 @@ void DfsphSolver::solveDensity(double dt) {
         // for good (issue 13). Expansion still gets no pressure.
         const Real predicted = rho[i] / rho0 + Real(dt) * sim_.divergence(i, v);
         source_[i] = 1 - predicted;
-        // Warm start (kWarmStart) from the pressure the last step solved. From the pressure
-        // that every frame file stores, rather than from a private solver array, so that
-        // resumed runs stay identical.
-        kappa_[i] = predicted > 1 || neighborCount(i) >= kDenseNeighborhood ? kWarmStart * p[i] * rho0 / (rho[i] * rho[i]) : 0;
+        // Warm start from half the previous step's pressure (as SPlisHSPlasH does). A full
+        // start would save sweeps (resting tank of examples/hydrostatic.toml: 12 instead of
+        // 35 a step, 1.8x faster) but the solve, stopped at its tolerance, then errs on the
+        // side of too much pressure, whose work pumps the fluid: the tank moved at 4.1 mm/s
+        // mean after 1 s instead of 0.72 (3.5 with a residual that also counts expansion
+        // under pressure; 0.82 starting from 3/4). From below, what the tolerance leaves is
+        // compression, which does no such work. Starting from the pressure, which every frame file stores,
+        // rather than from a private solver array keeps resumed runs identical.
+        kappa_[i] = predicted > 1 ? Real(0.5) * std::min(p[i] * rho0 / (rho[i] * rho[i]), Real(0.00025) / h2) : 0;
     });
     sim_.solverStats().pressureIterations =
         relaxedJacobi(kappa_, source_, dt * dt, sim_.scene().solver.maxDensityError, 2, true);
