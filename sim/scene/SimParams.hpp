@@ -86,6 +86,15 @@ struct SolverParams {
     double maxDensityError = 0.0002;
     double maxDivergenceError = 0.001;///< DFSPH: mean relative density change per step left by the divergence solve (0.1 %)
     int maxIterations = 100;          ///< DFSPH: iteration cap of each solve
+    /// DFSPH: how the density solve iterates (`sim.pressure_iteration`). Jacobi (default):
+    /// SPlisHSPlasH's relaxed Jacobi, warm-started from half the last pressure. CG: conjugate
+    /// gradients on the same system (it is symmetric: the pressure force is the adjoint of
+    /// the density change, walls included), then Jacobi sweeps to the tolerance: its
+    /// sweeps do not grow with the square of the fluid's depth in spacings as Jacobi's do
+    /// (examples/annotated.toml has the measurements). Experimental: for settled pools, not
+    /// for splashing flows.
+    enum class PressureIteration { Jacobi, ConjugateGradient };
+    PressureIteration pressureIteration = PressureIteration::Jacobi;
     /// Artificial viscosity alpha, dimensionless: adds alpha * h * U to the kinematic
     /// viscosity (h the kernel support, U the flow speed scale of the scene). SPH at
     /// millimetre spacing cannot resolve the tiny physical viscosity of water or oil; this

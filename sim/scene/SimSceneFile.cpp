@@ -139,6 +139,9 @@ SolverParams parseSolver(const SceneDocument& doc)
     p.maxDensityError = r.positive("max_density_error", p.maxDensityError);
     p.maxDivergenceError = r.positive("max_divergence_error", p.maxDivergenceError);
     p.maxIterations = r.integerInRange("max_iterations", p.maxIterations, 1, INT_MAX);
+    p.pressureIteration = r.choice("pressure_iteration", {"jacobi", "cg"}, "jacobi") == "cg"
+                              ? SolverParams::PressureIteration::ConjugateGradient
+                              : SolverParams::PressureIteration::Jacobi;
     p.artificialViscosity = r.number("artificial_viscosity", p.artificialViscosity);
     if (!(p.artificialViscosity >= 0 && p.artificialViscosity <= 1))
         r.fail("artificial_viscosity", "must be in [0, 1] (got " + formatNumber(p.artificialViscosity) + ")");

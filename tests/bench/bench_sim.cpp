@@ -27,7 +27,8 @@ using namespace ferro;
 
 namespace {
 
-SimScene damBreak40k(const std::string& kind, double surfaceTension) {
+SimScene damBreak40k(const std::string& kind, double surfaceTension, const std::string& iteration = "jacobi",
+                     double densityError = 0) {
     SimScene s;
     s.path = "bench dam break";
     s.fluid.restDensity = 1000;
@@ -42,6 +43,9 @@ SimScene damBreak40k(const std::string& kind, double surfaceTension) {
     s.container.min = Vec3d(0, 0, 0);
     s.container.max = Vec3d(0.32, 0.08, 0.2);
     s.solver.pressureSolver = kind;
+    s.solver.pressureIteration = iteration == "cg" ? SolverParams::PressureIteration::ConjugateGradient
+                                                   : SolverParams::PressureIteration::Jacobi;
+    if (densityError > 0) s.solver.maxDensityError = densityError;
     return s;
 }
 
@@ -65,9 +69,10 @@ int main(int argc, char** argv) {
     int threads = 2;
     double seconds = 0.1, warmup = 0.05;
     double sample = 0.005;
-    std::string solver = "all", tension = "all";
+    std::string solver = "all", tension = "all", iteration = "jacobi";
+    double densityError = 0;
     const char* usage = "usage: bench-sim [--threads N] [--seconds S] [--warmup S] [--solver all|wcsph|dfsph] "
-                        "[--tension all|off|akinci] [--sample S]\n";
+                        "[--tension all|off|akinci] [--sample S] [--pressure-iteration jacobi|cg] [--density-error E]\n";
     if (argc % 2 == 0) {
         std::fputs(usage, stderr);
         return 2;
@@ -79,6 +84,8 @@ int main(int argc, char** argv) {
         else if (!std::strcmp(argv[i], "--solver")) solver = argv[i + 1];
         else if (!std::strcmp(argv[i], "--tension")) tension = argv[i + 1];
         else if (!std::strcmp(argv[i], "--sample")) sample = std::atof(argv[i + 1]);
+        else if (!std::strcmp(argv[i], "--pressure-iteration")) iteration = argv[i + 1];
+        else if (!std::strcmp(argv[i], "--density-error")) densityError = std::atof(argv[i + 1]);
         else {
             std::fputs(usage, stderr);
             return 2;
@@ -86,20 +93,22 @@ int main(int argc, char** argv) {
     }
     if (threads < 1 || !(seconds > 0) || !(warmup >= 0) || !(sample > 0) ||
         (solver != "all" && !isPressureSolver(solver)) ||
-        (tension != "all" && tension != "off" && tension != "akinci")) {
+        (tension != "all" && tension != "off" && tension != "akinci") || (iteration != "jacobi" && iteration != "cg") ||
+        !(densityError >= 0)) {
         std::fprintf(stderr, "bench-sim: error: --threads >= 1, --seconds > 0, --warmup >= 0, --sample > 0, --solver all or a "
-                             "registered solver (wcsph, dfsph), --tension all, off or akinci\n");
+                             "registered solver (wcsph, dfsph), --tension all, off or akinci, --pressure-iteration jacobi or cg, --density-error >= 0\n");
         return 2;
     }
     tbb::global_control limit(tbb::global_control::max_allowed_parallelism, size_t(threads));
     std::printf("bench-sim: 40,960-particle dam break, %d threads, %.3f simulated s after %g s warm-up\n",
                 threads, seconds, warmup);
-    std::printf("reproduce: build/bin/bench-sim --threads %d --seconds %g --warmup %g --solver %s --tension %s --sample %g\n",
-                threads, seconds, warmup, solver.c_str(), tension.c_str(), sample);
+    std::printf("reproduce: build/bin/bench-sim --threads %d --seconds %g --warmup %g --solver %s --tension %s --sample %g "
+                "--pressure-iteration %s --density-error %g\n",
+                threads, seconds, warmup, solver.c_str(), tension.c_str(), sample, iteration.c_str(), densityError);
     {
         // The scene's derived settings, one parseable line (scripts/bench-peer.sh gives the
         // same ones to SPlisHSPlasH): viscosity is fluid plus artificial, c is WCSPH's sound speed.
-        const FluidSimulation probe(damBreak40k("dfsph", 0.0));
+        const FluidSimulation probe(damBreak40k("dfsph", 0.0, iteration, densityError));
         const SolverParams& sp = probe.scene().solver;
         std::printf("scene: particles=%zu spacing=%g support=%g rho0=%g nu=%.6g c=%.6g cfl=%g max_dt=%g "
                     "density_tol=%g divergence_tol=%g max_iterations=%d gravity=%g\n\n",
@@ -115,7 +124,7 @@ int main(int argc, char** argv) {
         if (solver != "all" && kind != solver) continue;
         for (double sigma : {0.0, 0.072}) {
             if ((tension == "off" && sigma > 0) || (tension == "akinci" && sigma == 0)) continue;
-            FluidSimulation sim(damBreak40k(kind, sigma));
+            FluidSimulation sim(damBreak40k(kind, sigma, iteration, densityError));
             sim.advanceTo(warmup);
             const size_t steps0 = sim.stepCount(), searches0 = sim.lastStep().searches;
             long iterP = 0, iterD = 0;
