@@ -66,7 +66,7 @@ private:
     FluidSimulation& sim_;
     std::vector<Real> alpha_, kappa_, kappaV_, source_, residual_;
     std::vector<Real> cgResidual_, cgPreconditioned_, cgDirection_, cgProduct_; // conjugateGradient's vectors
-    std::vector<uint8_t> cgFree_;   // conjugateGradient: 1 where a particle may carry pressure
+    std::vector<uint8_t> cgInSet_;  // conjugateGradient: 1 where a particle may carry pressure (the set S)
 };
 
 void DfsphSolver::computeFactors() {
@@ -151,8 +151,8 @@ int DfsphSolver::conjugateGradient(std::vector<Real>& kappa, const std::vector<R
     // particles the first left under tension and solves again from there (taking back in
     // the particles left out that the step then compresses made a dam break's solve churn:
     // 100 sweeps, 0.096 % left); negative values are then clamped, and the caller's
-    // Jacobi sweeps finish the complementarity problem. Dot
-    // products in fixed order (deterministicSum): resumed runs stay exact.
+    // Jacobi sweeps finish the complementarity problem. Dot products in fixed order
+    // (deterministicSum): resumed runs stay exact.
     const size_t n = sim_.size();
     const Real hp = Real(hPow);
     const std::vector<Vec3>& a = sim_.accelerations();
@@ -160,33 +160,33 @@ int DfsphSolver::conjugateGradient(std::vector<Real>& kappa, const std::vector<R
     std::vector<Real>& Z = cgPreconditioned_;  // alpha R on S
     std::vector<Real>& P = cgDirection_;
     std::vector<Real>& Q = cgProduct_;         // M P
-    std::vector<uint8_t>& free = cgFree_;
+    std::vector<uint8_t>& inS = cgInSet_;
     R.resize(n);
     Z.resize(n);
     P.resize(n);
     Q.resize(n);
-    free.resize(n);
+    inS.resize(n);
     forEachParticle(n, [&](size_t i) {
-        free[i] = source[i] < 0 || neighborCount(i) >= kDenseNeighborhood;
-        if (!free[i]) kappa[i] = 0;
+        inS[i] = source[i] < 0 || neighborCount(i) >= kDenseNeighborhood;
+        if (!inS[i]) kappa[i] = 0;
     });
     // Mean compression the step would leave, hPow R_i where positive: the Jacobi sweeps' measure.
     auto error = [&]() {
         return deterministicSum(n, [&](size_t i) { return std::max(double(hp * R[i]), 0.0); }) / double(std::max<size_t>(n, 1));
     };
     auto dotOnS = [&](const std::vector<Real>& x, const std::vector<Real>& y) {
-        return deterministicSum(n, [&](size_t i) { return free[i] ? double(x[i]) * double(y[i]) : 0.0; });
+        return deterministicSum(n, [&](size_t i) { return inS[i] ? double(x[i]) * double(y[i]) : 0.0; });
     };
     int it = 0;
     constexpr int kRounds = 2;
     for (int round = 0; round < kRounds && it < maxIterations; ++round) {
         if (round > 0) {
             // Particles the first round left under tension leave S.
-            const double leaving = deterministicSum(n, [&](size_t i) { return free[i] && kappa[i] < 0 ? 1.0 : 0.0; });
+            const double leaving = deterministicSum(n, [&](size_t i) { return inS[i] && kappa[i] < 0 ? 1.0 : 0.0; });
             if (leaving == 0) break;
             forEachParticle(n, [&](size_t i) {
-                if (free[i] && kappa[i] < 0) {
-                    free[i] = 0;
+                if (inS[i] && kappa[i] < 0) {
+                    inS[i] = 0;
                     kappa[i] = 0;
                 }
             });
@@ -196,7 +196,7 @@ int DfsphSolver::conjugateGradient(std::vector<Real>& kappa, const std::vector<R
         sim_.pressureAccelerations(kappa);
         forEachParticle(n, [&](size_t i) {
             R[i] = -source[i] / hp + sim_.divergence(i, a);
-            Z[i] = free[i] ? alpha_[i] * R[i] : 0;
+            Z[i] = inS[i] ? alpha_[i] * R[i] : 0;
             P[i] = Z[i];
         });
         double rz = dotOnS(R, Z);
@@ -212,16 +212,16 @@ int DfsphSolver::conjugateGradient(std::vector<Real>& kappa, const std::vector<R
             if (!(pq > 0)) break;
             const Real step = Real(rz / pq);
             forEachParticle(n, [&](size_t i) {
-                if (free[i]) kappa[i] += step * P[i];
+                if (inS[i]) kappa[i] += step * P[i];
                 R[i] -= step * Q[i];
-                Z[i] = free[i] ? alpha_[i] * R[i] : 0;
+                Z[i] = inS[i] ? alpha_[i] * R[i] : 0;
             });
             ++it;
             err = error();
             const double rzNext = dotOnS(R, Z);
             const Real beta = Real(rzNext / rz);
             rz = rzNext;
-            forEachParticle(n, [&](size_t i) { P[i] = free[i] ? Z[i] + beta * P[i] : 0; });
+            forEachParticle(n, [&](size_t i) { P[i] = inS[i] ? Z[i] + beta * P[i] : 0; });
         }
     }
     forEachParticle(n, [&](size_t i) { kappa[i] = std::max(kappa[i], Real(0)); });
