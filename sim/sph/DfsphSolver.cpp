@@ -18,6 +18,9 @@ namespace {
 /// where the divergence solve leaves it alone (SPlisHSPlasH's threshold for 3-D).
 constexpr uint32_t kDenseNeighborhood = 20;
 
+/// The density solve starts from this fraction of the last step's pressure (solveDensity).
+constexpr double kDensityWarmStart = 0.8;
+
 class DfsphSolver final : public PressureSolver {
 public:
     explicit DfsphSolver(FluidSimulation& sim) : sim_(sim) {}
@@ -276,15 +279,19 @@ void DfsphSolver::solveDensity(double dt) {
         // for good (issue 13). Expansion still gets no pressure.
         const Real predicted = rho[i] / rho0 + Real(dt) * sim_.divergence(i, v);
         source_[i] = 1 - predicted;
-        // Warm start from half the previous step's pressure (as SPlisHSPlasH does). A full
-        // start would save sweeps (resting tank of examples/hydrostatic.toml: 12 instead of
-        // 35 a step, 1.8x faster) but the solve, stopped at its tolerance, then errs on the
-        // side of too much pressure, whose work pumps the fluid: the tank moved at 4.1 mm/s
-        // mean after 1 s instead of 0.72 (3.5 with a residual that also counts expansion
-        // under pressure; 0.82 starting from 3/4). From below, what the tolerance leaves is
-        // compression, which does no such work. Starting from the pressure, which every frame file stores,
-        // rather than from a private solver array keeps resumed runs identical.
-        kappa_[i] = predicted > 1 ? Real(0.5) * std::min(p[i] * rho0 / (rho[i] * rho[i]), Real(0.00025) / h2) : 0;
+        // Warm start from 0.8 of the previous step's pressure where the step compresses
+        // (SPlisHSPlasH: 0.5). The solve, stopped at its tolerance, must end below the
+        // right pressure: what it leaves is then compression, which the next step's source
+        // corrects, where too much pressure does work that pumps the fluid. A start from
+        // half rebuilds the other half with smooth (slow, for Jacobi) sweeps; from 0.8 the
+        // start stays below and a fifth is left to rebuild. Measured (issue 29): bench-sim's
+        // dam break 25.3 instead of 50.7 sweeps a step at the same measured compression
+        // (0.0249 %), 1.64x less wall time; the resting tank of examples/hydrostatic.toml
+        // 13 instead of 36, 0.47 mm/s mean after 2 s (0.37 from half); from 0.9 the tank
+        // pumps (2.0 mm/s), from the full pressure 4.1. Starting from the pressure, which
+        // every frame file stores, rather than from a private solver array keeps resumed
+        // runs identical.
+        kappa_[i] = predicted > 1 ? Real(kDensityWarmStart) * std::min(p[i] * rho0 / (rho[i] * rho[i]), Real(0.00025) / h2) : 0;
     });
     const SolverParams& sp = sim_.scene().solver;
     const int cg = sp.pressureIteration == SolverParams::PressureIteration::ConjugateGradient
