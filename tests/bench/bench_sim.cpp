@@ -2,7 +2,16 @@
 // count), for each solver, with and without surface tension.
 //
 //   build/bin/bench-sim [--threads 2] [--seconds 0.1] [--warmup 0.05] [--solver all|wcsph|dfsph]
-//                       [--tension all|off|akinci] [--sample 0.005]
+//                       [--tension all|off|akinci] [--sample 0.005] [--widen K]
+//
+// --widen K makes the block and the box K times as wide and as long (the same 40 layers
+// deep): K x K x 40,960 particles (2: 163,840; 5: 1,024,000), for the cost as the work grows.
+// Each row then also gives the cost per particle and step, the process's peak memory per
+// particle, and the pressure sweep alone (one pressure-acceleration pass and one divergence
+// pass, the body of a DFSPH iteration) timed on the state after the run: its time, the bytes
+// it streams (neighbour indices and kernel gradients twice, the per-particle arrays) and
+// the rate that makes, beside the machine's memory bandwidth (a STREAM-like triad over
+// 3 x 256 MB, measured in the same run).
 //
 // Prints milliseconds per step, the mean solver iterations, wall seconds per simulated
 // second (what a shot costs), how many steps one neighbour search lasts (WCSPH keeps
@@ -14,6 +23,9 @@
 // Only the steps are timed, not the sampling.
 #include "sim/sph/FluidSimulation.hpp"
 
+#include "sim/core/ParticleLoops.hpp"
+
+#include <sys/resource.h>
 #include <tbb/global_control.h>
 
 #include <algorithm>
@@ -28,7 +40,7 @@ using namespace ferro;
 namespace {
 
 SimScene damBreak40k(const std::string& kind, double surfaceTension, const std::string& iteration = "jacobi",
-                     double densityError = 0) {
+                     double densityError = 0, int widen = 1) {
     SimScene s;
     s.path = "bench dam break";
     s.fluid.restDensity = 1000;
@@ -37,11 +49,11 @@ SimScene damBreak40k(const std::string& kind, double surfaceTension, const std::
     s.fluid.spacing = 0.0025;
     FluidBlock b;
     b.min = Vec3d(0, 0, 0);
-    b.max = Vec3d(0.08, 0.08, 0.1);  // 32 x 32 x 40 = 40,960 particles
+    b.max = Vec3d(0.08 * widen, 0.08 * widen, 0.1);  // 32 x 32 x 40 = 40,960 particles (times widen^2)
     s.fluid.blocks.push_back(b);
     s.container.type = ContainerParams::Type::Box;
     s.container.min = Vec3d(0, 0, 0);
-    s.container.max = Vec3d(0.32, 0.08, 0.2);
+    s.container.max = Vec3d(0.32 * widen, 0.08 * widen, 0.2);
     s.solver.pressureSolver = kind;
     s.solver.pressureIteration = iteration == "cg" ? SolverParams::PressureIteration::ConjugateGradient
                                                    : SolverParams::PressureIteration::Jacobi;
@@ -58,6 +70,60 @@ double meanCompression(const FluidSimulation& sim) {
     return sum / double(std::max<size_t>(sim.size(), 1));
 }
 
+/// Peak resident memory of this process so far [bytes].
+double peakMemory() {
+    rusage u{};
+    getrusage(RUSAGE_SELF, &u);
+    return 1024.0 * double(u.ru_maxrss);
+}
+
+/// Memory bandwidth [bytes/s]: a STREAM triad a = b + s c over three 256 MB arrays on the
+/// bench's threads, best of 5 (24 bytes a element: two reads, one write).
+double triadBandwidth() {
+    const size_t n = size_t(32) << 20;
+    std::vector<double> a(n, 0.0), b(n, 1.0), c(n, 2.0);
+    double best = 0;
+    for (int r = 0; r < 5; ++r) {
+        const auto t0 = std::chrono::steady_clock::now();
+        forEachParticle(n, [&](size_t i) { a[i] = b[i] + 3.0 * c[i]; });
+        const double t = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+        best = std::max(best, 24.0 * double(n) / t);
+    }
+    if (a[n / 2] != 7.0) std::abort();  // keeps the loop
+    return best;
+}
+
+struct SweepCost {
+    double seconds = 0;  ///< one sweep
+    double bytes = 0;    ///< streamed per sweep
+};
+
+/// The body of a DFSPH pressure iteration on the simulation's current neighbour lists: the
+/// pressure accelerations of a pressure field, then their divergence per particle (the two
+/// passes over the pair lists of DfsphSolver's relaxed Jacobi sweep), best of 10.
+SweepCost timePressureSweep(FluidSimulation& sim) {
+    const size_t n = sim.size();
+    std::vector<Real> kappa(n), out(n);
+    for (size_t i = 0; i < n; ++i) kappa[i] = Real(1e-3) * Real(i % 7);
+    const std::vector<Vec3>& a = sim.accelerations();
+    SweepCost cost;
+    cost.seconds = 1e30;
+    for (int r = 0; r < 10; ++r) {
+        const auto t0 = std::chrono::steady_clock::now();
+        sim.pressureAccelerations(kappa);
+        forEachParticle(n, [&](size_t i) { out[i] = kappa[i] - Real(0.5) * sim.divergence(i, a); });
+        cost.seconds = std::min(cost.seconds, std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count());
+    }
+    // Streamed: per pair (fluid and wall) its index and gradient in both passes; per
+    // particle the lists' offset and count (both passes), kappa (read twice), the
+    // accelerations (written, read) and the result (written). Gathers of neighbours'
+    // kappa and acceleration are taken to hit the cache (particles are sorted in space).
+    const double pairs = double(sim.fluidNeighbors().index.size() + sim.boundaryNeighbors().index.size());
+    cost.bytes = 2 * pairs * (sizeof(uint32_t) + sizeof(Vec3)) +
+                 double(n) * (2 * 2 * 2 * sizeof(uint32_t) + 2 * sizeof(Real) + 2 * sizeof(Vec3) + sizeof(Real));
+    return cost;
+}
+
 } // namespace
 
 bool isPressureSolver(const std::string& name) {
@@ -71,8 +137,10 @@ int main(int argc, char** argv) {
     double sample = 0.005;
     std::string solver = "all", tension = "all", iteration = "jacobi";
     double densityError = 0;
+    int widen = 1;
     const char* usage = "usage: bench-sim [--threads N] [--seconds S] [--warmup S] [--solver all|wcsph|dfsph] "
-                        "[--tension all|off|akinci] [--sample S] [--pressure-iteration jacobi|cg] [--density-error E]\n";
+                        "[--tension all|off|akinci] [--sample S] [--pressure-iteration jacobi|cg] [--density-error E] "
+                        "[--widen K]\n";
     if (argc % 2 == 0) {
         std::fputs(usage, stderr);
         return 2;
@@ -86,6 +154,7 @@ int main(int argc, char** argv) {
         else if (!std::strcmp(argv[i], "--sample")) sample = std::atof(argv[i + 1]);
         else if (!std::strcmp(argv[i], "--pressure-iteration")) iteration = argv[i + 1];
         else if (!std::strcmp(argv[i], "--density-error")) densityError = std::atof(argv[i + 1]);
+        else if (!std::strcmp(argv[i], "--widen")) widen = std::atoi(argv[i + 1]);
         else {
             std::fputs(usage, stderr);
             return 2;
@@ -94,21 +163,22 @@ int main(int argc, char** argv) {
     if (threads < 1 || !(seconds > 0) || !(warmup >= 0) || !(sample > 0) ||
         (solver != "all" && !isPressureSolver(solver)) ||
         (tension != "all" && tension != "off" && tension != "akinci") || (iteration != "jacobi" && iteration != "cg") ||
-        !(densityError >= 0)) {
+        !(densityError >= 0) || widen < 1 || widen > 8) {
         std::fprintf(stderr, "bench-sim: error: --threads >= 1, --seconds > 0, --warmup >= 0, --sample > 0, --solver all or a "
-                             "registered solver (wcsph, dfsph), --tension all, off or akinci, --pressure-iteration jacobi or cg, --density-error >= 0\n");
+                             "registered solver (wcsph, dfsph), --tension all, off or akinci, --pressure-iteration jacobi or cg, "
+                             "--density-error >= 0, --widen 1 to 8\n");
         return 2;
     }
     tbb::global_control limit(tbb::global_control::max_allowed_parallelism, size_t(threads));
-    std::printf("bench-sim: 40,960-particle dam break, %d threads, %.3f simulated s after %g s warm-up\n",
-                threads, seconds, warmup);
+    std::printf("bench-sim: %d-particle dam break, %d threads, %.3f simulated s after %g s warm-up\n",
+                40960 * widen * widen, threads, seconds, warmup);
     std::printf("reproduce: build/bin/bench-sim --threads %d --seconds %g --warmup %g --solver %s --tension %s --sample %g "
-                "--pressure-iteration %s --density-error %g\n",
-                threads, seconds, warmup, solver.c_str(), tension.c_str(), sample, iteration.c_str(), densityError);
+                "--pressure-iteration %s --density-error %g --widen %d\n",
+                threads, seconds, warmup, solver.c_str(), tension.c_str(), sample, iteration.c_str(), densityError, widen);
     {
         // The scene's derived settings, one parseable line (scripts/bench-peer.sh gives the
         // same ones to SPlisHSPlasH): viscosity is fluid plus artificial, c is WCSPH's sound speed.
-        const FluidSimulation probe(damBreak40k("dfsph", 0.0, iteration, densityError));
+        const FluidSimulation probe(damBreak40k("dfsph", 0.0, iteration, densityError, widen));
         const SolverParams& sp = probe.scene().solver;
         std::printf("scene: particles=%zu spacing=%g support=%g rho0=%g nu=%.6g c=%.6g cfl=%g max_dt=%g "
                     "density_tol=%g divergence_tol=%g max_iterations=%d gravity=%g\n\n",
@@ -124,7 +194,7 @@ int main(int argc, char** argv) {
         if (solver != "all" && kind != solver) continue;
         for (double sigma : {0.0, 0.072}) {
             if ((tension == "off" && sigma > 0) || (tension == "akinci" && sigma == 0)) continue;
-            FluidSimulation sim(damBreak40k(kind, sigma, iteration, densityError));
+            FluidSimulation sim(damBreak40k(kind, sigma, iteration, densityError, widen));
             sim.advanceTo(warmup);
             const size_t steps0 = sim.stepCount(), searches0 = sim.lastStep().searches;
             long iterP = 0, iterD = 0;
@@ -152,7 +222,16 @@ int main(int argc, char** argv) {
                         double(iterP) / double(steps), double(iterD) / double(steps),
                         double(steps) / double(std::max<size_t>(searches, 1)),
                         100 * solverError / double(steps), 100 * sampledError / double(std::max(samples, 1)));
+            // The sweep needs the stored kernel gradients: DFSPH's lists have them, WCSPH's not.
+            const SweepCost sweep = sim.fluidNeighbors().hasGradients() ? timePressureSweep(sim) : SweepCost{};
+            const double n = double(sim.size());
+            std::printf("cost: solver=%s tension=%s particles=%zu ns_per_particle_step=%.1f peak_bytes_per_particle=%.0f "
+                        "sweep_ms=%.3f sweep_ns_per_particle=%.2f sweep_bytes_per_particle=%.0f sweep_gbytes_per_s=%.2f\n",
+                        sim.pressureSolverLabel(), sigma > 0 ? "Akinci" : "off", sim.size(),
+                        1e9 * wall / double(steps) / n, peakMemory() / n, 1e3 * sweep.seconds, 1e9 * sweep.seconds / n,
+                        sweep.bytes / n, sweep.seconds > 0 ? sweep.bytes / sweep.seconds / 1e9 : 0.0);
         }
     }
+    std::printf("memory bandwidth (triad, %d threads): %.2f GB/s\n", threads, triadBandwidth() / 1e9);
     return 0;
 }
