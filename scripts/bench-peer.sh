@@ -28,8 +28,9 @@
 # Ferro's mean time step of the same run as a fixed step (SPlisHSPlasH's CFL ignores the
 # speed of sound, so Ferro's sound-speed CFL cannot be given to it as a rule).
 # Not matched (stated in peer.md): SPlisHSPlasH's particle volume is 0.8 d^3 (a fixed
-# factor of its fluid model), so its block starts 20 % below rest density and settles
-# denser; it is compiled with -march=native (AVX2), Ferro for generic x86-64; both in
+# factor of its fluid model), so its fluid is the same lattice at 0.928 d (0.8 of Ferro's
+# volume, at rest density: see peer_scene) and has 1.25x Ferro's neighbours a particle;
+# it is compiled with -march=native (AVX2), Ferro for generic x86-64; both in
 # single precision; OpenMP against TBB.
 #
 # The density error each code reaches is measured one way for both: the mean compression
@@ -131,7 +132,7 @@ peer_scene() {
   maxit="$(scene_value max_iterations)" g="$(scene_value gravity)"
   python3 - "$work/peer_$solver.json" "$solver" "$dt" "$spacing" "$nu" "$c" "$rho0" "$tol" "$dtol" "$maxdt" \
     "$maxit" "$g" "$(seconds_for "$solver")" "$sample" "$work/box.obj" <<'PY'
-import json, sys
+import json, os, sys
 (path, solver, dt, spacing, nu, c, rho0, tol, dtol, maxdt, maxit, g, seconds, sample, box) = sys.argv[1:]
 spacing, nu, c, rho0, g = float(spacing), float(nu), float(c), float(rho0), float(g)
 r = 0.5 * spacing
@@ -159,18 +160,29 @@ config = {
     "DFSPH": {"minIterations": 2, "maxIterations": int(maxit), "maxError": 100 * float(tol),
               "maxIterationsV": int(maxit), "maxErrorV": 100 * float(dtol), "enableDivergenceSolver": True},
 }
-# SPlisHSPlasH fills a block from start + diameter at diameter spacing, round(size / d) - 1
-# particles per axis: a block from -r to 32 d + r (and 40 d + r) gives Ferro's 32 x 32 x 40
-# lattice, the first layer half a spacing from the walls.
+# The same start for both: each code's block at its own rest density. SPlisHSPlasH's
+# particle volume is 0.8 d^3 (fixed in its fluid model), so its own fluid blocks (a lattice
+# at d) start 20 % under-dense and need no pressure for the first ~20 ms (2 iterations a
+# step where Ferro's block, at rest density, needs ~50). It gets Ferro's 32 x 32 x 40
+# lattice at the spacing 0.8^(1/3) d = 0.928 d instead, from a particle file (Partio's
+# ASCII PDA), the first layer half a spacing d from the walls as Ferro's: the same count,
+# at rest density from the first step, 0.8 of Ferro's volume.
 n = (32, 32, 40)
+dense = spacing * 0.8 ** (1.0 / 3.0)
+pda = os.path.join(os.path.dirname(path), "peer_block.pda")
+with open(pda, "w") as f:
+    f.write("ATTRIBUTES\nposition\nTYPES\nV\nNUMBER_OF_PARTICLES: %d\nBEGIN DATA\n" % (n[0] * n[1] * n[2]))
+    for i in range(n[0]):
+        for j in range(n[1]):
+            for k in range(n[2]):
+                f.write("%.9g %.9g %.9g\n" % (r + i * dense, r + j * dense, r + k * dense))
 scene = {
     "Configuration": config,
     "Materials": [{"id": "Fluid", "density0": rho0, "viscosityMethod": 1,
                    "Standard viscosity": {"viscosity": nu, "viscosityBoundary": 0.0}}],
     "RigidBodies": [{"geometryFile": box, "translation": [0, 0, 0], "scale": [1, 1, 1],
                      "isDynamic": False, "isWall": True, "samplingMode": 1}],
-    "FluidBlocks": [{"id": "Fluid", "denseMode": 0, "start": [-r, -r, -r],
-                     "end": [k * spacing + r for k in n], "translation": [0, 0, 0], "scale": [1, 1, 1]}],
+    "FluidModels": [{"id": "Fluid", "particleFile": pda, "translation": [0, 0, 0], "scale": [1, 1, 1]}],
 }
 json.dump(scene, open(path, "w"), indent=1)
 # The box as a closed triangle mesh (SPlisHSPlasH samples its surface), each face moved half
@@ -317,10 +329,11 @@ col() { awk -F, -v row="$1" -v name="$2" 'NR == 1 { for (i = 1; i <= NF; ++i) c[
   echo "  per WCSPH step and $(col "SPlisHSPlasH DFSPH" search_ms_per_step) of $(col "SPlisHSPlasH DFSPH" ms_per_step) ms per DFSPH step."
   echo "- Processor time of the whole processes (set-up and output included, less disturbed by other"
   echo "  load): SPlisHSPlasH over Ferro $(col "SPlisHSPlasH WCSPH" cpu_ratio_to_ferro)x with WCSPH, $(col "SPlisHSPlasH DFSPH" cpu_ratio_to_ferro)x with DFSPH."
-  echo "- Not matched: SPlisHSPlasH's particle volume is 0.8 d^3 (fixed in its fluid model), so its"
-  echo "  block starts 20 % below rest density, falls together and flows with ~1.25x Ferro's neighbours"
-  echo "  per particle, and needs no pressure until it has (DFSPH: 2 iterations per step over the first"
-  echo "  ~20 ms, against Ferro's ~48); it is built with -march=native (AVX2 kernels), Ferro for generic"
+  echo "- Same start: each code's block at its own rest density. SPlisHSPlasH's particle volume is"
+  echo "  0.8 d^3 (fixed in its fluid model), so it gets Ferro's 32 x 32 x 40 lattice at 0.928 d from a"
+  echo "  particle file (its own blocks at d start 20 % under-dense and need no pressure for ~20 ms)."
+  echo "- Not matched: its fluid has 0.8 of Ferro's volume and ~1.25x Ferro's neighbours per particle;"
+  echo "  it is built with -march=native (AVX2 kernels), Ferro for generic"
   echo "  x86-64 (SSE2); its threads are OpenMP (passive waiting) against Ferro's TBB, and OpenMP"
   echo "  suffers more on this oversubscribed machine."
 } > "$out/peer.md"
