@@ -103,7 +103,7 @@ mkdir -p "$work"
 TIMEFORMAT='%U %S'
 cpu_seconds() { awk '{ s = $1 + $2 } END { printf "%.2f", s }' "$1"; }
 
-# ferro_run SOLVER -> prints "steps ms_per_step wall_s_per_sim_s iterations solver_err rho_err cpu_s"
+# ferro_run SOLVER -> prints "steps ms_per_step wall_s_per_sim_s iterations solver_err rho_err cpu_s div_iterations"
 # and leaves the scene line in $work/scene.txt.
 ferro_run() {
   local log="$work/ferro_$1.log"
@@ -114,7 +114,7 @@ ferro_run() {
   fi
   grep '^scene:' "$log" > "$work/scene.txt" || die 3 "bench-sim printed no scene line ($log)"
   awk -v label="$(tr a-z A-Z <<< "$1")" -v cpu="$(cpu_seconds "$work/ferro_$1.cpu")" '$1 == label && $2 == "off" {
-      split($7, it, "/"); print $3, $4, $6, it[1], $9, $10, cpu; found = 1 }
+      split($7, it, "/"); print $3, $4, $6, it[1], $9, $10, cpu, (it[2] == "" ? 0 : it[2]); found = 1 }
     END { exit !found }' "$log" || die 3 "no $1 row in bench-sim's output ($log)"
 }
 
@@ -201,7 +201,7 @@ with open(box, "w") as f:
 PY
 }
 
-# peer_run SOLVER -> prints "steps ms_per_step wall_s_per_sim_s iterations particles rho_err cpu_s"
+# peer_run SOLVER -> prints "steps ms_per_step wall_s_per_sim_s iterations particles rho_err cpu_s div_iterations"
 peer_run() {
   local solver="$1" dir="$work/peer_$1"
   rm -rf "$dir"
@@ -226,6 +226,7 @@ total_ms = last(r"Time sum: SimStep: ([0-9.eE+-]+) ms")
 steps = round(total_ms / ms)
 simulated = last(r"Total number: Time step size: ([0-9.eE+-]+)")
 iterations = last(r"Average number: DFSPH - iterations: ([0-9.eE+-]+)") if solver == "dfsph" else 0.0
+div_iterations = last(r"Average number: DFSPH - iterationsV: ([0-9.eE+-]+)") if solver == "dfsph" else 0.0
 # Exported densities: frame 1 is written after the first step, frame k + 1 after the first
 # step past k x sample, so frames 2.. are the samples Ferro takes.
 def frame(p):
@@ -245,7 +246,7 @@ for p in files:
     a.byteswap()  # VTK legacy binary is big-endian
     errors.append(sum(max(0.0, rho / rho0 - 1) for rho in a) / particles)
     os.remove(p)
-print(steps, ms, steps * ms / 1e3 / simulated, iterations, particles, 100 * sum(errors) / len(errors), cpu)
+print(steps, ms, steps * ms / 1e3 / simulated, iterations, particles, 100 * sum(errors) / len(errors), cpu, div_iterations)
 PY
 }
 
@@ -255,20 +256,20 @@ for ((r = 1; r <= repeat; ++r)); do
     echo "bench-peer.sh: run $r/$repeat, $solver: Ferro" >&2
     [[ "${PEER_REUSE:-0}" == 1 && -s "$work/ferro_$solver.txt" ]] || ferro_run "$solver" > "$work/ferro_$solver.txt"
     grep '^scene:' "$work/ferro_$solver.log" > "$work/scene.txt" || die 3 "no scene line in $work/ferro_$solver.log"
-    read -r f_steps f_ms f_wall f_iter f_err f_rho f_cpu < "$work/ferro_$solver.txt"
+    read -r f_steps f_ms f_wall f_iter f_err f_rho f_cpu f_div < "$work/ferro_$solver.txt"
     dt="$(awk -v s="$(seconds_for "$solver")" -v n="$f_steps" 'BEGIN { printf "%.9g", s / n }')"
     peer_scene "$solver" "$dt"
     echo "bench-peer.sh: run $r/$repeat, $solver: SPlisHSPlasH" >&2
     [[ "${PEER_REUSE:-0}" == 1 && -s "$work/peer_$solver.txt" ]] || peer_run "$solver" > "$work/peer_$solver.txt"
-    read -r p_steps p_ms p_wall p_iter p_particles p_rho p_cpu < "$work/peer_$solver.txt"
+    read -r p_steps p_ms p_wall p_iter p_particles p_rho p_cpu p_div < "$work/peer_$solver.txt"
     [[ "$p_particles" == "$(scene_value particles)" ]] ||
       die 3 "SPlisHSPlasH made $p_particles particles, Ferro $(scene_value particles): the scenes differ"
     # Keep each code's fastest run (least disturbed by other load on the machine).
     if [[ -z "${best[ferro_$solver]:-}" ]] || awk -v a="$f_ms" -v b="${best[ferro_$solver]%% *}" 'BEGIN { exit !(a < b) }'; then
-      best[ferro_$solver]="$f_ms $f_steps $f_wall $f_iter $f_err $f_rho $dt $f_cpu"
+      best[ferro_$solver]="$f_ms $f_steps $f_wall $f_iter $f_err $f_rho $dt $f_cpu ${f_div:-0}"
     fi
     if [[ -z "${best[peer_$solver]:-}" ]] || awk -v a="$p_ms" -v b="${best[peer_$solver]%% *}" 'BEGIN { exit !(a < b) }'; then
-      best[peer_$solver]="$p_ms $p_steps $p_wall $p_iter $p_rho $p_cpu"
+      best[peer_$solver]="$p_ms $p_steps $p_wall $p_iter $p_rho $p_cpu ${p_div:-0}"
     fi
   done
 done
@@ -277,24 +278,25 @@ particles="$(scene_value particles)"
 tol_percent="$(awk -v t="$(scene_value density_tol)" 'BEGIN { printf "%g", 100 * t }')"
 csv="$out/peer.csv"
 {
-  echo "setting,code,solver,particles,threads,simulated_s,steps,mean_dt_ms,ms_per_step,wall_s_per_sim_s,iterations_per_step,solver_density_error_percent,mean_density_error_percent,density_tolerance_percent,ms_ratio_to_ferro,ratio_to_ferro,cpu_s_per_sim_s,cpu_ratio_to_ferro,search_ms_per_step,reference"
+  echo "setting,code,solver,particles,threads,simulated_s,steps,mean_dt_ms,ms_per_step,wall_s_per_sim_s,iterations_per_step,solver_density_error_percent,mean_density_error_percent,density_tolerance_percent,ms_ratio_to_ferro,ratio_to_ferro,cpu_s_per_sim_s,cpu_ratio_to_ferro,search_ms_per_step,reference,divergence_iterations_per_step,solve_iterations_ratio_to_ferro"
   for solver in wcsph dfsph; do
     label="$(tr a-z A-Z <<< "$solver")"
-    read -r f_ms f_steps f_wall f_iter f_err f_rho dt f_cpu <<< "${best[ferro_$solver]}"
-    read -r p_ms p_steps p_wall p_iter p_rho p_cpu <<< "${best[peer_$solver]}"
+    read -r f_ms f_steps f_wall f_iter f_err f_rho dt f_cpu f_div <<< "${best[ferro_$solver]}"
+    read -r p_ms p_steps p_wall p_iter p_rho p_cpu p_div <<< "${best[peer_$solver]}"
     tol="$([[ $solver == dfsph ]] && echo "$tol_percent" || echo "")"
     # SPlisHSPlasH's own timer of its neighbour search (CompactNSearch), part of ms_per_step.
     p_search="$(awk '/Average time: neighborhood_search:/ { v = $4 } END { print v }' "$work/peer_$solver/stdout.log")"
     awk -v OFS=, -v s="$(seconds_for "$solver")" -v n="$particles" -v th="$threads" -v L="$label" -v tol="$tol" \
       -v fms="$f_ms" -v fs="$f_steps" -v fw="$f_wall" -v fi="$f_iter" -v fe="$f_err" -v fr="$f_rho" \
-      -v pms="$p_ms" -v ps="$p_steps" -v pw="$p_wall" -v pi="$p_iter" -v pr="$p_rho" -v fc="$f_cpu" -v pc="$p_cpu" -v psearch="$p_search" 'BEGIN {
+      -v pms="$p_ms" -v ps="$p_steps" -v pw="$p_wall" -v pi="$p_iter" -v pr="$p_rho" -v fc="$f_cpu" -v pc="$p_cpu" -v psearch="$p_search" -v fd="$f_div" -v pd="$p_div" 'BEGIN {
         fwall = fs * fms / 1e3 / s   # from the step times, as for SPlisHSPlasH
         print "Ferro " L, "Ferro", L, n, th, s, fs, sprintf("%.4f", 1e3 * s / fs), sprintf("%.2f", fms), sprintf("%.1f", fwall),
-              sprintf("%.1f", fi), sprintf("%.4f", fe), sprintf("%.4f", fr), tol, "1.00", "1.00", sprintf("%.1f", fc / s), "1.00", "", "itself"
+              sprintf("%.1f", fi), sprintf("%.4f", fe), sprintf("%.4f", fr), tol, "1.00", "1.00", sprintf("%.1f", fc / s), "1.00", "", "itself",
+              sprintf("%.1f", fd), (fi + fd > 0 ? "1.00" : "")
         print "SPlisHSPlasH " L, "SPlisHSPlasH", L, n, th, s, ps, sprintf("%.4f", 1e3 * s / ps), sprintf("%.2f", pms), sprintf("%.1f", pw),
               sprintf("%.1f", pi), "", sprintf("%.4f", pr), tol, sprintf("%.2f", pms / fms), sprintf("%.2f", pw / fwall),
               sprintf("%.1f", pc / s), sprintf("%.2f", pc / fc), psearch == "" ? "" : sprintf("%.1f", psearch),
-              "Ferro " L " in the same run"
+              "Ferro " L " in the same run", sprintf("%.1f", pd), (fi + fd > 0 ? sprintf("%.2f", (pi + pd) / (fi + fd)) : "")
       }'
   done
 } > "$csv"
@@ -319,7 +321,8 @@ col() { awk -F, -v row="$1" -v name="$2" 'NR == 1 { for (i = 1; i <= NF; ++i) c[
   echo
   echo "- DFSPH at the same tolerance ($tol_percent % mean density error): SPlisHSPlasH takes"
   echo "  $(col "SPlisHSPlasH DFSPH" ratio_to_ferro)x Ferro's wall time per simulated second ($(col "SPlisHSPlasH DFSPH" ms_ratio_to_ferro)x per step; $(col "SPlisHSPlasH DFSPH" steps) steps"
-  echo "  against $(col "Ferro DFSPH" steps), $(col "SPlisHSPlasH DFSPH" iterations_per_step) against $(col "Ferro DFSPH" iterations_per_step) density iterations per step); measured mean"
+  echo "  against $(col "Ferro DFSPH" steps), $(col "SPlisHSPlasH DFSPH" iterations_per_step) against $(col "Ferro DFSPH" iterations_per_step) density iterations per step, and"
+  echo "  $(col "SPlisHSPlasH DFSPH" divergence_iterations_per_step) against $(col "Ferro DFSPH" divergence_iterations_per_step) divergence iterations: Ferro does $(awk -v r="$(col "SPlisHSPlasH DFSPH" solve_iterations_ratio_to_ferro)" 'BEGIN { printf "%.2f", 1 / r }')x SPlisHSPlasH's solver iterations a step); measured mean"
   echo "  compression $(col "SPlisHSPlasH DFSPH" mean_density_error_percent) % against Ferro's $(col "Ferro DFSPH" mean_density_error_percent) % (Ferro's solver residual: $(col "Ferro DFSPH" solver_density_error_percent) %)."
   echo "- WCSPH with the same stiffness and the same time step: SPlisHSPlasH takes"
   echo "  $(col "SPlisHSPlasH WCSPH" ratio_to_ferro)x Ferro's wall time per simulated second; mean compression"

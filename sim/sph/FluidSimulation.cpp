@@ -34,26 +34,6 @@ constexpr Real kCohesionWeight = 1000;
 
 namespace {
 
-#if defined(__SSE2__)
-/// a[j[0..3]] in four lanes.
-inline __m128 gather4(const Real* a, const uint32_t* j) { return _mm_set_ps(a[j[3]], a[j[2]], a[j[1]], a[j[0]]); }
-
-/// Component c of v[j[0..3]] in four lanes.
-inline __m128 gather4(const Vec3* v, const uint32_t* j, int c) {
-    return _mm_set_ps(v[j[3]][c], v[j[2]][c], v[j[1]][c], v[j[0]][c]);
-}
-
-/// Offsets x_i - x_j to four points j (coordinates split into px, py, pz) and their squared
-/// lengths, for the loops that take four pairs at a time.
-struct PairOffsets4 {
-    __m128 dx, dy, dz, r2;
-    PairOffsets4(const Vec3& xi, const Real* px, const Real* py, const Real* pz, const uint32_t* j)
-        : dx(_mm_sub_ps(_mm_set1_ps(xi.x()), gather4(px, j))),
-          dy(_mm_sub_ps(_mm_set1_ps(xi.y()), gather4(py, j))),
-          dz(_mm_sub_ps(_mm_set1_ps(xi.z()), gather4(pz, j))),
-          r2(_mm_add_ps(_mm_add_ps(_mm_mul_ps(dx, dx), _mm_mul_ps(dy, dy)), _mm_mul_ps(dz, dz))) {}
-};
-#endif
 
 void splitCoordinates(const std::vector<Vec3>& x, std::vector<Real>& px, std::vector<Real>& py,
                       std::vector<Real>& pz) {
@@ -365,8 +345,8 @@ void FluidSimulation::searchCandidates() {
         candidates.resize(total);
         lists.index.resize(total);
         lists.count.resize(n);
-        if (storeGradients_) lists.gradW.resize(total);
-        else lists.gradW.clear();
+        if (storeGradients_) lists.gradFactor.resize(total);
+        else lists.gradFactor.clear();
         forEachParticle(n, [&](size_t i) { std::copy_n(&scratch[i * capacity], count[i], &candidates[lists.offset[i]]); });
     };
     slots(fluidCount, scratch_, capacity_, fluidNbr_, fluidCandidates_);
@@ -395,7 +375,7 @@ void FluidSimulation::updateNeighbors() {
         const uint32_t o = lists.offset[i], slots = lists.offset[i + 1] - o;
         const uint32_t* cand = candidates.data() + o;
         uint32_t* out = lists.index.data() + o;
-        Vec3* grad = storeGradients ? lists.gradW.data() + o : nullptr;
+        Real* grad = storeGradients ? lists.gradFactor.data() + o : nullptr;
         uint32_t cnt = 0, k = 0;
         Real sum = 0;
 #if defined(__SSE2__)
@@ -409,14 +389,11 @@ void FluidSimulation::updateNeighbors() {
             sum4 = _mm_add_ps(sum4, _mm_mul_ps(vol, kernel4.W(r)));
             const int hit = _mm_movemask_ps(_mm_cmplt_ps(d.r2, h24));
             if (grad) {
-                const __m128 sc = kernel4.gradFactor(r);
-                alignas(16) float gx[4], gy[4], gz[4];
-                _mm_store_ps(gx, _mm_mul_ps(sc, d.dx));
-                _mm_store_ps(gy, _mm_mul_ps(sc, d.dy));
-                _mm_store_ps(gz, _mm_mul_ps(sc, d.dz));
+                alignas(16) float sc[4];
+                _mm_store_ps(sc, kernel4.gradFactor(r));
                 for (int l = 0; l < 4; ++l) {
                     out[cnt] = c[l];
-                    grad[cnt] = Vec3(gx[l], gy[l], gz[l]);
+                    grad[cnt] = sc[l];
                     cnt += uint32_t(hit >> l) & 1u;
                 }
             } else {
@@ -433,9 +410,9 @@ void FluidSimulation::updateNeighbors() {
             const Vec3 d(xi.x() - qx[j], xi.y() - qy[j], xi.z() - qz[j]);
             const Real r2 = d.squaredNorm();
             out[cnt] = j;
-            Real w;
-            if (grad) kernel_.evaluate(d, r2, w, grad[cnt]);
-            else w = kernel_.W(std::sqrt(r2));
+            const Real r = std::sqrt(r2);
+            const Real w = kernel_.W(r);
+            if (grad) grad[cnt] = kernel_.gradWFactor(r);
             sum += (volume ? volume[j] : V) * w;
             cnt += uint32_t(r2 < h2);
         }
@@ -739,12 +716,33 @@ void FluidSimulation::pressureAccelerations(const std::vector<Real>& kappa) {
     const Real V = Real(volume_);
     forEachParticle(x_.size(), [&](size_t i) {
         const Real ki = kappa[i];
+        const Vec3 xi = x_[i];
         Vec3 acc = Vec3::Zero();
-        for (uint32_t k = fluidNbr_.begin(i); k < fluidNbr_.end(i); ++k)
-            acc -= (V * (ki + kappa[fluidNbr_.index[k]])) * fluidNbr_.gradW[k];
+        uint32_t k = fluidNbr_.begin(i);
+        const uint32_t end = fluidNbr_.end(i);
+#if defined(__SSE2__)
+        const __m128 ki4 = _mm_set1_ps(ki), V4 = _mm_set1_ps(V);
+        __m128 ax = _mm_setzero_ps(), ay = _mm_setzero_ps(), az = _mm_setzero_ps();
+        for (; k + 4 <= end; k += 4) {
+            const uint32_t* c = fluidNbr_.index.data() + k;
+            const Offsets4 d(xi, px_.data(), py_.data(), pz_.data(), c);
+            const __m128 s = _mm_mul_ps(_mm_mul_ps(V4, _mm_add_ps(ki4, gather4(kappa.data(), c))),
+                                        _mm_loadu_ps(fluidNbr_.gradFactor.data() + k));
+            ax = _mm_add_ps(ax, _mm_mul_ps(s, d.dx));
+            ay = _mm_add_ps(ay, _mm_mul_ps(s, d.dy));
+            az = _mm_add_ps(az, _mm_mul_ps(s, d.dz));
+        }
+        acc = -Vec3(horizontalSum(ax), horizontalSum(ay), horizontalSum(az));
+#endif
+        for (; k < end; ++k) {
+            const uint32_t j = fluidNbr_.index[k];
+            acc -= (V * (ki + kappa[j]) * fluidNbr_.gradFactor[k]) * (xi - x_[j]);
+        }
         if (ki != 0)
-            for (uint32_t k = boundaryNbr_.begin(i); k < boundaryNbr_.end(i); ++k)
-                acc -= (kWallMirror * bVolume_[boundaryNbr_.index[k]] * ki) * boundaryNbr_.gradW[k];
+            for (uint32_t k = boundaryNbr_.begin(i); k < boundaryNbr_.end(i); ++k) {
+                const uint32_t b = boundaryNbr_.index[k];
+                acc -= (kWallMirror * bVolume_[b] * ki * boundaryNbr_.gradFactor[k]) * (xi - bx_[b]);
+            }
         a_[i] = acc;
     });
 }

@@ -11,6 +11,7 @@
 // so runs are repeatable and resume bit-for-bit from a frame file.
 #include "sim/sph/Container.hpp"
 #include "sim/sph/FluidSeed.hpp"
+#include "sim/sph/Gather4.hpp"
 #include "sim/sph/FluidMagnetics.hpp"
 #include "sim/sph/ImplicitViscosity.hpp"
 #include "sim/sph/Kernel.hpp"
@@ -284,13 +285,32 @@ private:
 // Inline: the DFSPH solver calls it per particle in every Jacobi sweep, from its own file.
 inline Real FluidSimulation::divergence(size_t i, const std::vector<Vec3>& u) const {
     // sum_j V (u_i - u_j) . grad W_ij + sum_b V_b u_i . grad W_ib (walls are at rest).
-    const Vec3 ui = u[i];
+    const Vec3 ui = u[i], xi = x_[i];
     Real sum = 0;
-    for (uint32_t k = fluidNbr_.begin(i); k < fluidNbr_.end(i); ++k)
-        sum += (ui - u[fluidNbr_.index[k]]).dot(fluidNbr_.gradW[k]);
+    uint32_t k = fluidNbr_.begin(i);
+    const uint32_t end = fluidNbr_.end(i);
+#if defined(__SSE2__)
+    const __m128 uix = _mm_set1_ps(ui.x()), uiy = _mm_set1_ps(ui.y()), uiz = _mm_set1_ps(ui.z());
+    __m128 sum4 = _mm_setzero_ps();
+    for (; k + 4 <= end; k += 4) {
+        const uint32_t* c = fluidNbr_.index.data() + k;
+        const Offsets4 d(xi, px_.data(), py_.data(), pz_.data(), c);
+        const __m128 dot = _mm_add_ps(_mm_add_ps(_mm_mul_ps(_mm_sub_ps(uix, gather4(u.data(), c, 0)), d.dx),
+                                                 _mm_mul_ps(_mm_sub_ps(uiy, gather4(u.data(), c, 1)), d.dy)),
+                                      _mm_mul_ps(_mm_sub_ps(uiz, gather4(u.data(), c, 2)), d.dz));
+        sum4 = _mm_add_ps(sum4, _mm_mul_ps(_mm_loadu_ps(fluidNbr_.gradFactor.data() + k), dot));
+    }
+    sum = horizontalSum(sum4);
+#endif
+    for (; k < end; ++k) {
+        const uint32_t j = fluidNbr_.index[k];
+        sum += fluidNbr_.gradFactor[k] * (ui - u[j]).dot(xi - x_[j]);
+    }
     sum *= Real(volume_);
-    for (uint32_t k = boundaryNbr_.begin(i); k < boundaryNbr_.end(i); ++k)
-        sum += bVolume_[boundaryNbr_.index[k]] * ui.dot(boundaryNbr_.gradW[k]);
+    for (uint32_t k = boundaryNbr_.begin(i); k < boundaryNbr_.end(i); ++k) {
+        const uint32_t b = boundaryNbr_.index[k];
+        sum += bVolume_[b] * boundaryNbr_.gradFactor[k] * ui.dot(xi - bx_[b]);
+    }
     return sum;
 }
 

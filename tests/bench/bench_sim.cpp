@@ -114,12 +114,12 @@ SweepCost timePressureSweep(FluidSimulation& sim) {
         forEachParticle(n, [&](size_t i) { out[i] = kappa[i] - Real(0.5) * sim.divergence(i, a); });
         cost.seconds = std::min(cost.seconds, std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count());
     }
-    // Streamed: per pair (fluid and wall) its index and gradient in both passes; per
+    // Streamed: per pair (fluid and wall) its index and gradient factor in both passes; per
     // particle the lists' offset and count (both passes), kappa (read twice), the
     // accelerations (written, read) and the result (written). Gathers of neighbours'
     // kappa and acceleration are taken to hit the cache (particles are sorted in space).
     const double pairs = double(sim.fluidNeighbors().index.size() + sim.boundaryNeighbors().index.size());
-    cost.bytes = 2 * pairs * (sizeof(uint32_t) + sizeof(Vec3)) +
+    cost.bytes = 2 * pairs * (sizeof(uint32_t) + sizeof(Real)) +
                  double(n) * (2 * 2 * 2 * sizeof(uint32_t) + 2 * sizeof(Real) + 2 * sizeof(Vec3) + sizeof(Real));
     return cost;
 }

@@ -151,10 +151,10 @@ TEST_CASE("NeighborLists: slots, current counts, stored gradients", "[neighbors]
     REQUIRE(l.end(0) == 1);        // the current neighbours are the first count[i] slots
     REQUIRE(l.begin(2) == l.end(2));
     REQUIRE_FALSE(l.hasGradients());
-    l.gradW.assign(l.index.size(), Vec3::Zero());
+    l.gradFactor.assign(l.index.size(), Real(0));
     REQUIRE(l.hasGradients());
     l.clear(2);
     REQUIRE(l.index.empty());
-    REQUIRE(l.gradW.empty());
+    REQUIRE(l.gradFactor.empty());
     REQUIRE(l.offset.size() == 3);
 }
