@@ -11,7 +11,7 @@
 #   --only AREAS   run only these areas (the other sections already in OUT_DIR are kept)
 #   --no-build     skip scripts/build.sh (use FERRO_BIN or build/bin as they are)
 #   --assemble     run no area: only rewrite OUT_DIR/README.md from the sections in OUT_DIR
-# Areas, in order: sim magnetics surface spikes render scene-cost still-frames peer (scripts/bench/<area>.sh;
+# Areas, in order: sim scaling magnetics surface spikes render scene-cost still-frames peer (scripts/bench/<area>.sh;
 # peer needs FERRO_PEER_SRC=/path/to/SPlisHSPlasH and otherwise prints why it is skipped).
 # Environment: BENCH_QUICK=1 (tiny sizes: checks the scripts in minutes, not for the report),
 # FERRO_BIN, FERRO_PEER_SRC. Needs gnuplot (scripts/install-deps.sh --with-bench).
@@ -19,7 +19,7 @@
 set -euo pipefail
 root="$(cd "$(dirname "$0")/.." && pwd)"
 die() { echo "bench.sh: error: $2" >&2; exit "$1"; }
-all_areas=(sim magnetics surface spikes render scene-cost still-frames peer)
+all_areas=(sim scaling magnetics surface spikes render scene-cost still-frames peer)
 
 out="" only="" build=1 assemble=0
 while [[ $# -gt 0 ]]; do
