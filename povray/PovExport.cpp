@@ -445,8 +445,26 @@ bool writeTextFile(const std::string& path, const std::string& text, bool onlyIf
     return true;
 }
 
-PovExporter::PovExporter(const SceneDocument& doc, std::string outDir, int shotFirst, int shotLast)
-    : outDir_(std::move(outDir)), shot_(describeShot(doc, shotFirst, shotLast)), tracks_(parseMagnets(doc))
+PovScene parsePovScene(const SceneDocument& doc, int shotFirst, int shotLast, PovOutput what)
+{
+    if (what == PovOutput::ShotAndFrames)
+        return {describeShot(doc, shotFirst, shotLast), parseMagnets(doc)};
+    // Only what exportFrame uses, so that a [render] or [container] edit does not re-export
+    // every frame (scripts/shot.mk stamps the export with exactly the keys read here).
+    PovScene scene;
+    scene.shot.fps = parseShotFps(doc);
+    scene.shot.render = parseRenderMagnetSizes(doc);
+    scene.tracks = parseMagnets(doc);
+    return scene;
+}
+
+PovExporter::PovExporter(const SceneDocument& doc, std::string outDir, int shotFirst, int shotLast, PovOutput what)
+    : PovExporter(parsePovScene(doc, shotFirst, shotLast, what), std::move(outDir), what)
+{
+}
+
+PovExporter::PovExporter(PovScene scene, std::string outDir, PovOutput what)
+    : outDir_(std::move(outDir)), what_(what), shot_(std::move(scene.shot)), tracks_(std::move(scene.tracks))
 {
     std::error_code ec;
     fs::create_directories(outDir_, ec);
@@ -456,6 +474,8 @@ PovExporter::PovExporter(const SceneDocument& doc, std::string outDir, int shotF
 
 bool PovExporter::writeShotFiles(bool forceTemplate) const
 {
+    if (what_ != PovOutput::ShotAndFrames)
+        throw std::logic_error("PovExporter::writeShotFiles: made for the frame includes only");
     const fs::path dir(outDir_);
     writeTextFile((dir / "shot.pov").string(), masterScene(shot_), true);
     writeTextFile((dir / "render.ini").string(), renderIni(shot_), true);

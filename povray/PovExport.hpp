@@ -113,11 +113,31 @@ std::string lookTemplate();
 /// Returns true if the file was written. Throws PovExportError.
 bool writeTextFile(const std::string& path, const std::string& text, bool onlyIfChanged = false);
 
+/// Everything ferro-pov reads from a scene: the shot and the magnets' tracks.
+struct PovScene {
+    ShotDescription shot;
+    std::vector<MagnetTrack> tracks;
+};
+
+/// What an export writes: the shot files and the frame includes, or the frame includes only
+/// (mesh_NNNN.inc, magnets_NNNN.inc), which need only the frame rate, the magnets' tracks and
+/// their display sizes.
+enum class PovOutput { ShotAndFrames, FramesOnly };
+
+/// The whole of ferro-pov's scene parsing (so its --print-scene-inputs lists exactly what an
+/// export reads). ShotAndFrames: describeShot and the [[magnets]] tracks; FramesOnly: shot.fps,
+/// render.magnet_length / magnet_radius and the tracks (the rest of `shot` is default, and
+/// a PovExporter made from it must not write the shot files). Throws SceneError.
+PovScene parsePovScene(const SceneDocument& doc, int shotFirst = -1, int shotLast = -1,
+                       PovOutput what = PovOutput::ShotAndFrames);
+
 /// Exports one shot into a directory.
 class PovExporter {
 public:
     /// `outDir` is created if missing. Throws SceneError on a bad scene.
-    PovExporter(const SceneDocument& doc, std::string outDir, int shotFirst = -1, int shotLast = -1);
+    PovExporter(const SceneDocument& doc, std::string outDir, int shotFirst = -1, int shotLast = -1,
+                PovOutput what = PovOutput::ShotAndFrames);
+    PovExporter(PovScene scene, std::string outDir, PovOutput what = PovOutput::ShotAndFrames);
 
     /// shot.pov, render.ini, shot.ini (each only if its text changed) and look.inc (only if
     /// missing, or always with `forceTemplate`). Returns true if look.inc was written.
@@ -138,6 +158,7 @@ public:
 
 private:
     std::string outDir_;
+    PovOutput what_;
     ShotDescription shot_;
     std::vector<MagnetTrack> tracks_;
 };

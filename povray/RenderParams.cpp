@@ -8,6 +8,23 @@
 
 namespace ferro {
 
+namespace {
+
+void readMagnetSizes(const TableReader& r, RenderParams& p)
+{
+    p.magnetLength = r.positive("magnet_length", p.magnetLength);
+    p.magnetRadius = r.positive("magnet_radius", p.magnetRadius);
+}
+
+} // namespace
+
+RenderParams parseRenderMagnetSizes(const SceneDocument& doc)
+{
+    RenderParams p;
+    readMagnetSizes(doc.section("render"), p);
+    return p;
+}
+
 RenderParams parseRenderParams(const SceneDocument& doc)
 {
     TableReader r = doc.section("render");
@@ -34,8 +51,7 @@ RenderParams parseRenderParams(const SceneDocument& doc)
     p.antialiasThreshold = r.positive("antialias_threshold", p.antialiasThreshold);
     p.antialiasDepth = r.integerInRange("antialias_depth", p.antialiasDepth, 1, 9);
     p.lightSamples = r.integerInRange("light_samples", p.lightSamples, 1, 9);
-    p.magnetLength = r.positive("magnet_length", p.magnetLength);
-    p.magnetRadius = r.positive("magnet_radius", p.magnetRadius);
+    readMagnetSizes(r, p);
     r.finish();
     return p;
 }

@@ -32,5 +32,8 @@ struct RenderParams {
 
 /// Parses [render] (absent section = all defaults). Throws SceneError on a bad or unknown key.
 RenderParams parseRenderParams(const SceneDocument& doc);
+/// Only render.magnet_length and render.magnet_radius (the rest default, no unknown-key
+/// check): what the per-frame magnet includes need. Throws SceneError on a bad value.
+RenderParams parseRenderMagnetSizes(const SceneDocument& doc);
 
 } // namespace ferro

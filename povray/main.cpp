@@ -25,10 +25,11 @@ int main(int argc, char** argv)
     std::string input, scenePath, outDir, framesText, shotFramesText;
     std::vector<std::string> overrides;
     int frame = -1, threads = 0;
-    bool forceTemplate = false, noShot = false, quiet = false;
+    bool forceTemplate = false, noShot = false, quiet = false, printInputs = false;
     app.add_option("mesh", input, "mesh file (PLY, OBJ, ...), or a pattern with {:04} / %04d together with --frames");
     app.add_option("--scene,-s", scenePath, "scene file (TOML): [render], [container], [shot], [[magnets]]")->required();
-    app.add_option("--out,-o", outDir, "shot directory")->required();
+    auto* outOpt = app.add_option("--out,-o", outDir, "shot directory");
+    addSceneInputsFlag(app, printInputs, {outOpt});
     auto* frameOpt = app.add_option("--frame", frame, "frame number of a single mesh (default: the mesh's `comment frame`)")
                          ->check(CLI::NonNegativeNumber);
     app.add_option("--frames", framesText, "frame range FIRST:LAST of a mesh pattern")->excludes(frameOpt);
@@ -51,6 +52,11 @@ int main(int argc, char** argv)
             { const FrameRange r = frameRangeArgument("--frames", framesText); frames = {r.first, r.last}; }
         if (!shotFramesText.empty())
             { const FrameRange r = frameRangeArgument("--shot-frames", shotFramesText); shotFrames = {r.first, r.last}; }
+        const PovOutput what = noShot ? PovOutput::FramesOnly : PovOutput::ShotAndFrames;
+        if (printInputs) {
+            SceneDocument doc = SceneDocument::load(scenePath, overrides);
+            return printSceneInputs(doc, [&](const SceneDocument& d) { parsePovScene(d, shotFrames.first, shotFrames.second, what); });
+        }
         if (!framesText.empty() && input.empty())
             throw CLI::ValidationError("--frames", "needs a mesh pattern");
         if (framesText.empty() && input.empty() && noShot)
@@ -58,7 +64,7 @@ int main(int argc, char** argv)
 
         const auto limit = limitThreads(threads);
         const SceneDocument doc = SceneDocument::load(scenePath, overrides);
-        const PovExporter exporter(doc, outDir, shotFrames.first, shotFrames.second);
+        const PovExporter exporter(doc, outDir, shotFrames.first, shotFrames.second, what);
         if (!input.empty() && frames.first >= 0) {
             runFrames({frames.first, frames.second}, {{"mesh pattern", input}}, [&](int f) {
                 exporter.exportFrameFile(framePath(input, f), f);

@@ -10,10 +10,10 @@
 # meshes and render are not redone: extending [shot] duration, or a magnet edit that takes
 # effect from frame N on, re-meshes only the frames whose particles changed.
 #
-# Every stage also depends on a stamp of the scene sections it reads, .scene/<stage>.toml,
-# rewritten (at every make run) only when that section's text changes: editing [render]
-# re-renders every frame but re-meshes none, editing [surface] re-meshes, editing [sim] or the
-# magnets re-simulates. Editing shot/look.inc re-renders.
+# Every stage also depends on a stamp of the scene keys it reads, .scene/<stage>.toml,
+# rewritten (at every make run) only when one of those values changes: editing [render]
+# re-exports and re-renders every frame but re-meshes none, editing [surface] re-meshes,
+# editing [sim] or the magnets re-simulates. Editing shot/look.inc re-renders.
 #
 # OUTDIR/Makefile, written by scripts/shot.sh, sets these and includes this file:
 #   SCENE        scene file (absolute path)
@@ -22,7 +22,7 @@
 #   SPIKES       1: run ferro-spikes between ferro-surface and ferro-pov; 0: export the surface
 #   MAX_FRAMES   optional: simulate only up to this frame (ferro-sim --max-frames)
 #   SETS         optional: scene overrides for every stage, words --set=section.key=value (a
-#                preset and shot.sh's --set); each stage's stamp holds those of its sections
+#                preset and shot.sh's --set); each stage's stamp shows the values after them
 #
 # Targets (run in OUTDIR, or make -C OUTDIR ...):
 #   make -j2                     everything: all frames up to PNG, then the video
@@ -49,28 +49,27 @@ FFMPEG ?= ffmpeg
 POVRAY_ARGS ?=
 
 SETS ?=
-# $(call sets_of,sections): the SETS words of these sections (for a stage's stamp).
-sets_of = $(filter $(foreach s,$(1),--set=$(s).%),$(SETS))
 
 FRAMES := $(shell seq -f %04g $(FIRST) $(LAST))
 SHOT_FRAMES := $(shell seq -f %04g $(SHOT_FIRST) $(SHOT_LAST))
 
 # ---- Scene stamps ---------------------------------------------------------------------------
-# awk: print the lines of the scene's top-level sections named in `want` ([name], [[name]],
-# [name.sub] ...), without comment and blank lines. Keys before any header count for all.
-SECTION_AWK := BEGIN { n = split(want, w, " "); for (i = 1; i <= n; i++) keep[w[i]] = 1; on = 1 } \
-  /^[ \t]*\[/ { h = $$0; sub(/^[ \t]*\[+[ \t]*/, "", h); sub(/[ \t]*\].*$$/, "", h); split(h, p, "."); gsub(/"/, "", p[1]); on = (p[1] in keep) } \
-  /^[ \t]*(\#|$$)/ { next } \
-  on { print }
-# $(call scene_stamp,name,sections,extra line): refresh .scene/name.toml if its text changed.
+# A stage's stamp is what the stage itself says it reads: `--print-scene-inputs` makes it
+# parse the scene (with SETS applied) and print every key its parser looked up, with its
+# value or "(absent)". There is no second list of which stage reads what to go stale: a key a
+# parser starts to read is in that stage's stamp from then on. A scene that does not parse
+# stops make here with the stage's own one-line error (the frames made so far are untouched).
+# $(call scene_stamp,name,command,extra line): refresh .scene/name.toml if its text changed.
 scene_stamp = $(shell mkdir -p .scene && t=.scene/.$(1).$$$$ && \
-  awk -v want='$(2)' '$(SECTION_AWK)' '$(SCENE)' > $$t && echo '$(3)' >> $$t && \
-  if cmp -s $$t .scene/$(1).toml; then rm -f $$t; else mv -f $$t .scene/$(1).toml; fi)
-$(call scene_stamp,sim,shot fluid container sim magnets magnetization,max_frames=$(MAX_FRAMES) $(call sets_of,shot fluid container sim magnets magnetization))
-$(call scene_stamp,surface,surface,$(call sets_of,surface))
-$(call scene_stamp,spikes,spikes magnets magnetization,$(call sets_of,spikes magnets magnetization))
-$(call scene_stamp,export,magnets shot,$(call sets_of,magnets shot))
-$(call scene_stamp,render,render container shot magnets,shot_frames=$(SHOT_FIRST):$(SHOT_LAST) $(call sets_of,render container shot magnets))
+  if { $(2) && echo '$(3)'; } > $$t; then \
+    if cmp -s $$t .scene/$(1).toml; then rm -f $$t; else mv -f $$t .scene/$(1).toml; fi; \
+  else rm -f $$t; echo failed; fi)
+stamp_or_stop = $(if $(call scene_stamp,$(1),$(2),$(3)),$(error shot.mk: cannot read the scene for the $(1) stage (see the line above)))
+$(call stamp_or_stop,sim,$(FERRO_BIN)/ferro-sim '$(SCENE)' --print-scene-inputs $(SETS),max_frames=$(MAX_FRAMES))
+$(call stamp_or_stop,surface,$(FERRO_BIN)/ferro-surface --scene '$(SCENE)' --print-scene-inputs $(SETS),)
+$(call stamp_or_stop,spikes,$(FERRO_BIN)/ferro-spikes --scene '$(SCENE)' --print-scene-inputs $(SETS),)
+$(call stamp_or_stop,export,$(FERRO_BIN)/ferro-pov --scene '$(SCENE)' --no-shot --print-scene-inputs $(SETS),)
+$(call stamp_or_stop,render,$(FERRO_BIN)/ferro-pov --scene '$(SCENE)' --shot-frames $(SHOT_FIRST):$(SHOT_LAST) --print-scene-inputs $(SETS),shot_frames=$(SHOT_FIRST):$(SHOT_LAST))
 
 # 0010 -> 10 (a leading zero would read as octal to some parsers).
 frame_number = $$((10\#$(1)))

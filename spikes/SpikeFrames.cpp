@@ -28,7 +28,7 @@ namespace ferro {
 
 SpikeScene parseSpikeScene(const SceneDocument& doc)
 {
-    const SimScene sim = parseSimScene(doc);
+    const SimScene sim = parseSimScene(doc, SceneUse::PerFrame);
     SpikeScene scene;
     scene.params = parseSpikeParams(doc);
     scene.magnets = sim.magnets;

@@ -21,12 +21,13 @@ int main(int argc, char** argv) {
     std::vector<std::string> overrides;
     int threads = 0;
     bool quiet = false;
-    app.add_option("surface", surface, "surface mesh (PLY from ferro-surface), or a pattern with {:04} / %04d")
-        ->required();
+    bool printInputs = false;
+    auto* surfaceOpt = app.add_option("surface", surface, "surface mesh (PLY from ferro-surface), or a pattern with {:04} / %04d");
     app.add_option("--particles,-p", particles,
                    "particle file (or pattern) of the same frame: |M| for the mapping area; optional");
     app.add_option("--scene,-s", scenePath, "scene file (TOML): fluid, container, magnets, [spikes]")->required();
-    app.add_option("--out,-o", out, "output mesh (or pattern); PLY unless the extension says otherwise")->required();
+    auto* outOpt = app.add_option("--out,-o", out, "output mesh (or pattern); PLY unless the extension says otherwise");
+    addSceneInputsFlag(app, printInputs, {surfaceOpt, outOpt});
     app.add_option("--frames", frames, "frame range A:B (inclusive) for patterns")->type_name("A:B");
     addSetOption(app, overrides, "override a scene key: --set spikes.alpha=80");
     addThreadsOption(app, threads, "worker threads (0 = all cores)");
@@ -39,8 +40,11 @@ int main(int argc, char** argv) {
     };
     return runCommandLine("ferro-spikes", app, argc, argv, errors, [&] {
         const FrameRange range = frames.empty() ? FrameRange{-1, -1} : frameRangeArgument("--frames", frames);
+        SceneDocument doc = SceneDocument::load(scenePath, overrides);
+        if (printInputs)
+            return printSceneInputs(doc, [](const SceneDocument& d) { parseSpikeScene(d); });
         const auto limit = limitThreads(threads);
-        const SpikeScene scene = parseSpikeScene(SceneDocument::load(scenePath, overrides));
+        const SpikeScene scene = parseSpikeScene(doc);
         if (range.first < 0) {
             const SpikeResult res = spikeFrame(scene, surface, particles, out);
             if (!quiet)

@@ -27,9 +27,10 @@ int main(int argc, char** argv) {
     std::vector<std::string> overrides;
     double voxelSize = -1, kernelRadius = -1, adaptivity = -1;
     int smoothing = -1, threads = 0;
-    app.add_option("particles", run.input, "particle file (PLY), or a pattern with {:04} or %04d for --frames")
-        ->required();
-    app.add_option("--out,-o", run.output, "mesh file, or a pattern for --frames (PLY; others via --format)")->required();
+    bool printInputs = false;
+    auto* input = app.add_option("particles", run.input, "particle file (PLY), or a pattern with {:04} or %04d for --frames");
+    auto* out = app.add_option("--out,-o", run.output, "mesh file, or a pattern for --frames (PLY; others via --format)");
+    addSceneInputsFlag(app, printInputs, {input, out});
     app.add_option("--frames", frames, "frame range A:B (inclusive): INPUT and --out are patterns")->type_name("A:B");
     app.add_option("--scene", scenePath, "scene file: parameters from its [surface] section");
     addSetOption(app, overrides, "override a scene key: --set surface.voxel_size=5e-4");
@@ -52,7 +53,7 @@ int main(int argc, char** argv) {
         // Internal failures (OpenVDB, out of memory, ...): their messages may span lines.
         exitOn<std::exception>(kExitFailure, "", oneLine),
     };
-    return runCommandLine("ferro-surface", app, argc, argv, errors, [&] {
+    return runCommandLine("ferro-surface", app, argc, argv, errors, [&]() -> int {
         if (!frames.empty()) {
             const FrameRange range = frameRangeArgument("--frames", frames);
             run.firstFrame = range.first;
@@ -61,9 +62,13 @@ int main(int argc, char** argv) {
         }
         SurfaceParams params;
         if (!scenePath.empty()) {
-            const SceneDocument doc = SceneDocument::load(scenePath, overrides);
+            SceneDocument doc = SceneDocument::load(scenePath, overrides);
             doc.checkSections(shotSceneSections());
+            if (printInputs)
+                return printSceneInputs(doc, [](const SceneDocument& d) { parseSurfaceParams(d); });
             params = parseSurfaceParams(doc);
+        } else if (printInputs) {
+            throw CLI::ValidationError("--print-scene-inputs", "needs --scene");
         } else if (!overrides.empty()) {
             params = parseSurfaceParams(SceneDocument::parse("", "--set", overrides));
         }

@@ -16,8 +16,10 @@ int main(int argc, char** argv) {
     RunOptions opt;
     std::vector<std::string> overrides;
     int threads = -1;
+    bool printInputs = false;
     app.add_option("scene", scenePath, "scene file (TOML)")->required();
-    app.add_option("--out,-o", opt.outDir, "output directory for particle files")->required();
+    auto* out = app.add_option("--out,-o", opt.outDir, "output directory for particle files");
+    addSceneInputsFlag(app, printInputs, {out});
     addSetOption(app, overrides, "override a scene key by its TOML path: --set section.key=value");
     app.add_option("--max-frames", opt.maxFrames, "stop after writing frame N (N frames after the initial one)")
         ->check(CLI::NonNegativeNumber);
@@ -34,7 +36,9 @@ int main(int argc, char** argv) {
         exitOn<ParticleFileError>(kExitIoError),
     };
     return runCommandLine("ferro-sim", app, argc, argv, errors, [&] {
-        const SceneDocument doc = SceneDocument::load(scenePath, overrides);
+        SceneDocument doc = SceneDocument::load(scenePath, overrides);
+        if (printInputs)
+            return printSceneInputs(doc, [](const SceneDocument& d) { parseSimScene(d); });
         const SimScene scene = parseSimScene(doc);
         opt.fingerprint = doc.fingerprint();
         opt.prerollFingerprint = doc.fingerprint({"fluid", "container", "sim", "magnetization"});

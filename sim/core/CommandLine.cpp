@@ -1,5 +1,6 @@
 #include "sim/core/CommandLine.hpp"
 
+#include "sim/core/SceneDocument.hpp"
 #include "sim/core/StageErrors.hpp"
 
 #include <CLI/CLI.hpp>
@@ -54,6 +55,27 @@ FrameRange frameRangeArgument(const std::string& option, const std::string& text
 
 CLI::Option* addSetOption(CLI::App& app, std::vector<std::string>& overrides, const std::string& help) {
     return app.add_option("--set", overrides, help)->type_name("KEY=VALUE");
+}
+
+CLI::Option* addSceneInputsFlag(CLI::App& app, bool& flag, const std::vector<CLI::Option*>& requiredOtherwise) {
+    for (CLI::Option* o : requiredOtherwise)
+        o->description(o->get_description() + " (required)");
+    app.final_callback([&flag, requiredOtherwise] {
+        if (flag)
+            return;
+        for (CLI::Option* o : requiredOtherwise)
+            if (o->count() == 0)
+                throw CLI::RequiredError(o->get_name());
+    });
+    return app.add_flag("--print-scene-inputs", flag,
+                        "print the scene keys this stage reads (after --set), one `key = value` a line, and exit");
+}
+
+ExitCode printSceneInputs(SceneDocument& doc, const std::function<void(const SceneDocument&)>& parse) {
+    doc.recordReads();
+    parse(doc);
+    std::cout << doc.readsText();
+    return kExitOk;
 }
 
 CLI::Option* addThreadsOption(CLI::App& app, int& threads, const std::string& help) {

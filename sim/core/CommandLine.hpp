@@ -30,6 +30,8 @@ class Option;
 
 namespace ferro {
 
+class SceneDocument;
+
 /// What one kind of failure of a stage's library means on the command line: an exception
 /// that `matches` ends the tool with exit code `code` and the line
 /// "<program>: error: <rewrite(what())><note>" (rewrite = identity when null).
@@ -79,6 +81,17 @@ FrameRange frameRangeArgument(const std::string& option, const std::string& text
 /// Adds the repeatable option --set KEY=VALUE that collects scene overrides for
 /// SceneDocument::load(path, overrides); `help` is its help line (with a stage's example).
 CLI::Option* addSetOption(CLI::App& app, std::vector<std::string>& overrides, const std::string& help);
+
+/// Adds the flag --print-scene-inputs: the stage parses its scene (after --set) and prints
+/// every key it read, SceneDocument::readsText, instead of running; scripts/shot.mk stamps
+/// each stage with that text, so the stage's own parser is the one list of what it reads.
+/// The options in `requiredOtherwise` are required except with this flag (CLI11's
+/// ->required() cannot say "unless"); their help lines say so.
+CLI::Option* addSceneInputsFlag(CLI::App& app, bool& flag, const std::vector<CLI::Option*>& requiredOtherwise);
+
+/// Turns on doc's read log, runs `parse` on it and prints the keys it read to stdout
+/// (--print-scene-inputs); returns kExitOk.
+ExitCode printSceneInputs(SceneDocument& doc, const std::function<void(const SceneDocument&)>& parse);
 
 /// Adds --threads N (N >= 0; 0 = all cores, see limitThreads) with the help line `help`.
 CLI::Option* addThreadsOption(CLI::App& app, int& threads, const std::string& help);

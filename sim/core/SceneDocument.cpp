@@ -13,6 +13,7 @@
 #include <cstdio>
 #include <filesystem>
 #include <limits>
+#include <map>
 #include <set>
 #include <sstream>
 
@@ -253,13 +254,17 @@ TableReader::TableReader(TableReader&&) noexcept = default;
 
 bool TableReader::has(const std::string& key) const
 {
-    return table_->contains(key);
+    const toml::node* n = table_->get(key);
+    doc_->noteRead(path_, key, n);
+    return n != nullptr;
 }
 
 const toml::node* TableReader::node(const std::string& key) const
 {
     used_->keys.insert(key);
-    return table_->get(key);
+    const toml::node* n = table_->get(key);
+    doc_->noteRead(path_, key, n);
+    return n;
 }
 
 std::string TableReader::where(const std::string& key) const
@@ -497,6 +502,10 @@ void TableReader::finish() const
 // ---------------------------------------------------------------------------------------
 // SceneDocument
 
+struct SceneDocument::ReadLog {
+    std::map<std::string, std::string> values; // "path.key" -> TOML text or "(absent)"
+};
+
 SceneDocument::SceneDocument() : root_(std::make_unique<toml::table>()) {}
 SceneDocument::SceneDocument(SceneDocument&&) noexcept = default;
 SceneDocument::~SceneDocument() = default;
@@ -579,6 +588,39 @@ std::string SceneDocument::fingerprint() const
     std::ostringstream text;
     text << toml::toml_formatter(*root_);
     return hashHex(text.str());
+}
+
+void SceneDocument::recordReads()
+{
+    if (!reads_)
+        reads_ = std::make_unique<ReadLog>();
+}
+
+void SceneDocument::noteRead(const std::string& tablePath, const std::string& key, const toml::node* n) const
+{
+    if (!reads_)
+        return;
+    std::ostringstream text;
+    if (!n)
+        text << "(absent)";
+    else if (const toml::table* t = n->as_table())
+        text << "{ " << toml::toml_formatter(*t, toml::format_flags::none) << " }";
+    else if (const toml::array* a = n->as_array())
+        text << toml::toml_formatter(*a, toml::format_flags::none);
+    else
+        n->visit([&](const auto& v) { text << toml::toml_formatter(v, toml::format_flags::none); });
+    std::string line = text.str();
+    std::replace(line.begin(), line.end(), '\n', ' ');
+    reads_->values[tablePath.empty() ? key : tablePath + "." + key] = line;
+}
+
+std::string SceneDocument::readsText() const
+{
+    std::string out;
+    if (reads_)
+        for (const auto& [key, value] : reads_->values)
+            out += key + " = " + value + "\n";
+    return out;
 }
 
 std::string SceneDocument::fingerprint(const std::vector<std::string>& sections) const

@@ -103,10 +103,23 @@ public:
     std::string fingerprint(const std::vector<std::string>& sections) const;
     const toml::table& root() const;
 
+    /// From now on, note every key a TableReader of this document looks up (present or
+    /// absent: a default is an input too). A stage parses its scene with this on to learn
+    /// exactly which keys it reads: its parser is the one list of its inputs.
+    void recordReads();
+    /// The keys read since recordReads(), one line each in sorted order,
+    /// `path.key = <TOML value>` or `path.key = (absent)`: the text of a stage's make stamp
+    /// (scripts/shot.mk), which changes exactly when a value the stage read changes.
+    std::string readsText() const;
+    /// Called by TableReader for each key it looks up (no-op unless recording).
+    void noteRead(const std::string& tablePath, const std::string& key, const toml::node* node) const;
+
 private:
     SceneDocument();
     std::string path_;
     std::unique_ptr<toml::table> root_;
+    struct ReadLog;
+    std::unique_ptr<ReadLog> reads_;
 };
 
 /// 16 hex digits of a stable 64-bit hash (FNV-1a) of `text`.

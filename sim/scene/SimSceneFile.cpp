@@ -22,11 +22,16 @@ const std::vector<std::string>& shotSceneSections()
 
 namespace {
 
+double readFps(const TableReader& r)
+{
+    return r.positive("fps", ShotParams{}.fps);
+}
+
 ShotParams parseShot(const SceneDocument& doc)
 {
     TableReader r = doc.section("shot");
     ShotParams p;
-    p.fps = r.positive("fps", p.fps);
+    p.fps = readFps(r);
     p.duration = r.positive("duration", p.duration);
     p.preroll = r.nonNegative("preroll", p.preroll);
     p.prerollRestSpeed = r.nonNegative("preroll_rest_speed", p.prerollRestSpeed);
@@ -157,18 +162,27 @@ SolverParams parseSolver(const SceneDocument& doc)
 
 } // namespace
 
-SimScene parseSimScene(const SceneDocument& doc)
+SimScene parseSimScene(const SceneDocument& doc, SceneUse use)
 {
     doc.checkSections(shotSceneSections());
     SimScene scene;
     scene.path = doc.path();
-    scene.shot = parseShot(doc);
+    if (use == SceneUse::Simulate)
+        scene.shot = parseShot(doc);
+    else
+        scene.shot.fps = readFps(doc.section("shot"));
     scene.fluid = parseFluid(doc);
     scene.container = parseContainer(doc);
     scene.solver = parseSolver(doc);
     scene.magnets = parseMagnets(doc);
     scene.magnetization = parseMagnetization(doc);
     return scene;
+}
+
+double parseShotFps(const SceneDocument& doc)
+{
+    doc.checkSections(shotSceneSections());
+    return readFps(doc.section("shot"));
 }
 
 SimScene loadSimScene(const std::string& path, const std::vector<std::string>& overrides)

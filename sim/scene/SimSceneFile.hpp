@@ -13,9 +13,17 @@ namespace ferro {
 /// Every top-level section of the scene file format, whichever stage reads it.
 const std::vector<std::string>& shotSceneSections();
 
+/// What a stage needs of the shot: Simulate reads all of [shot]; PerFrame (a stage that
+/// works on frames already simulated) reads only shot.fps, so that lengthening the shot or
+/// its pre-roll does not re-run that stage on frames whose particles did not change (its
+/// make stamp lists only the keys it reads: see --print-scene-inputs).
+enum class SceneUse { Simulate, PerFrame };
+
 /// Parses the sections ferro-sim owns ([shot], [fluid], [container], [sim]) plus the
 /// magnets, and validates them (positive densities and spacings, ...).
-SimScene parseSimScene(const SceneDocument& doc);
+SimScene parseSimScene(const SceneDocument& doc, SceneUse use = SceneUse::Simulate);
+/// shot.fps alone (validated as parseSimScene does), for a stage that needs only the frame rate.
+double parseShotFps(const SceneDocument& doc);
 /// load + parseSimScene.
 SimScene loadSimScene(const std::string& path, const std::vector<std::string>& overrides = {});
 
