@@ -671,3 +671,31 @@ TEST_CASE("scene errors quoting a line break stay one line (fuzz finding)", "[sc
     CHECK(key.find_first_of("\r\n") == std::string::npos);
     CHECK_THAT(key, Contains("shot.a\\nb\\r: unknown key"));
 }
+
+TEST_CASE("a stage's scene inputs are exactly the keys its parser read, with their values after --set", "[scene]")
+{
+    // scripts/shot.mk stamps each stage with this text (--print-scene-inputs): a value the
+    // parser read must show, an unread section must not, and a default is an input too.
+    SceneDocument doc = SceneDocument::parse("[shot]\nfps = 24\nduration = 3.0\n[render]\nwidth = 64\n", "t.toml",
+                                             {"shot.fps=25"});
+    doc.recordReads();
+    CHECK(parseShotFps(doc) == 25.0);
+    CHECK(doc.readsText() == "shot.fps = 25\n");
+
+    SceneDocument full = SceneDocument::parse("[shot]\nfps = 24\n[[fluid.block]]\nmin = [0, 0, 0]\nmax = [0.01, 0.01, 0.01]\n"
+                                              "count = 10\n[render]\nwidth = 64\n",
+                                              "t.toml");
+    full.recordReads();
+    const SimScene scene = parseSimScene(full, SceneUse::PerFrame);
+    const std::string text = full.readsText();
+    CHECK(text.find("shot.fps = 24\n") != std::string::npos);
+    CHECK(text.find("shot.duration") == std::string::npos);          // PerFrame: not the shot's length
+    CHECK(text.find("fluid.block[0].count = 10\n") != std::string::npos);
+    CHECK(text.find("fluid.rest_density = (absent)\n") != std::string::npos);
+    CHECK(text.find("render.") == std::string::npos);                // not ferro-sim's section
+    CHECK(scene.shot.fps == 24.0);
+
+    SceneDocument quiet = SceneDocument::parse("[shot]\nfps = 24\n", "t.toml");
+    parseShotFps(quiet);
+    CHECK(quiet.readsText().empty()); // not recording
+}
