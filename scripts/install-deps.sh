@@ -3,7 +3,7 @@
 # libclang-rt-dev build the libFuzzer targets of tests/fuzz, which the test suite runs briefly
 # (libFuzzer's library is only a recommend of clang, and recommends are not installed).
 # Idempotent: installs nothing when everything is present.
-# Usage: install-deps.sh [--with-video] [--with-bench]
+# Usage: install-deps.sh [--with-video] [--with-bench] [--with-slurm]
 # As root it runs apt-get;
 # otherwise it prints the exact apt-get line to run and exits 1.
 set -euo pipefail
@@ -19,11 +19,15 @@ PACKAGES=(
 # --with-video: also ffmpeg, which the demo uses to assemble the rendered frames into a
 # video and a GIF (the tests do not need it, so CI does not install it).
 # --with-bench: also gnuplot, which scripts/bench.sh uses to plot the report.
+# --with-slurm: also Slurm (slurm-wlm: slurmctld, slurmd and the client commands) and munge,
+# for submitting shots (scripts/shot.sh --slurm) and for the suite's one-node cluster
+# (scripts/slurm/local-cluster.sh, tests/slurm); the test command installs them.
 for arg in "$@"; do
   case "$arg" in
     --with-video) PACKAGES+=(ffmpeg) ;;
     --with-bench) PACKAGES+=(gnuplot-nox) ;;
-    *) echo "install-deps: error: unknown option $arg (--with-video, --with-bench)" >&2; exit 2 ;;
+    --with-slurm) PACKAGES+=(slurm-wlm munge python3) ;;
+    *) echo "install-deps: error: unknown option $arg (--with-video, --with-bench, --with-slurm)" >&2; exit 2 ;;
   esac
 done
 

@@ -21,6 +21,8 @@
 #   SHOT_FIRST, SHOT_LAST   the shot's frames (the range of shot/shot.ini and of the video)
 #   SPIKES       1: run ferro-spikes between ferro-surface and ferro-pov; 0: export the surface
 #   MAX_FRAMES   optional: simulate only up to this frame (ferro-sim --max-frames)
+#   SIM_ELSEWHERE  1: the particle files come from a simulation run outside make (Slurm)
+#   THREADS      optional: worker threads of each per-frame stage (default: all cores)
 #   SETS         optional: scene overrides for every stage, words --set=section.key=value (a
 #                preset and shot.sh's --set); each stage's stamp shows the values after them
 #
@@ -47,6 +49,10 @@ POVRAY ?= povray
 FFMPEG ?= ffmpeg
 # Extra POV-Ray options for every frame, e.g. POVRAY_ARGS='+W320 +H240' for a preview.
 POVRAY_ARGS ?=
+# Worker threads of each per-frame stage (empty: all cores). A scheduler's task sets it to
+# the cores it was given.
+THREADS ?=
+threads_arg = $(if $(THREADS),--threads $(THREADS))
 
 SETS ?=
 
@@ -106,18 +112,25 @@ particles/.complete: .scene/sim.toml
 
 # A particle file is made by the simulation (an order-only prerequisite: the file's own time,
 # set above, says whether it changed). A frame the simulation never reached is an error, not
-# an empty frame.
+# an empty frame. With SIM_ELSEWHERE=1 (a Slurm frame task: scripts/slurm/) another job runs
+# the simulation and publishes each frame when it is complete, so a frame never waits for
+# the whole run, and never starts one.
+ifeq ($(SIM_ELSEWHERE),1)
+particles/particles_%.ply:
+	@test -f $@ || { echo "shot.mk: $@ is missing: the simulation job has not published frame $*" >&2; exit 1; }
+else
 particles/particles_%.ply: | particles/.complete
 	@test -f $@ || { echo "shot.mk: $@ is missing: the simulation stopped before frame $*" >&2; exit 1; }
+endif
 
 # ---- Per frame ----------------------------------------------------------------------------------
 surface/surface_%.ply: particles/particles_%.ply .scene/surface.toml
 	@mkdir -p surface
-	$(FERRO_BIN)/ferro-surface $< --scene '$(SCENE)' --out $@ --quiet $(SETS)
+	$(FERRO_BIN)/ferro-surface $< --scene '$(SCENE)' --out $@ --quiet $(threads_arg) $(SETS)
 
 spiky/spiky_%.ply: surface/surface_%.ply particles/particles_%.ply .scene/spikes.toml
 	@mkdir -p spiky
-	$(FERRO_BIN)/ferro-spikes $< --particles particles/particles_$*.ply --scene '$(SCENE)' --out $@ --quiet $(SETS)
+	$(FERRO_BIN)/ferro-spikes $< --particles particles/particles_$*.ply --scene '$(SCENE)' --out $@ --quiet $(threads_arg) $(SETS)
 
 ifeq ($(SPIKES),1)
 EXPORTED_MESH := spiky/spiky_%.ply
@@ -141,7 +154,7 @@ shot/look.inc: | shot/shot.pov
 png/frame_%.png: shot/mesh_%.inc shot/magnets_%.inc shot/shot.pov shot/look.inc
 	@mkdir -p png shot/log
 	cd shot && $(POVRAY) render.ini -D Declare=FerroFrame=$(call frame_number,$*) \
-	  +O../png/.frame_$*.tmp.png $(POVRAY_ARGS) > log/frame_$*.log 2>&1 \
+	  +O../png/.frame_$*.tmp.png $(if $(THREADS),+WT$(THREADS)) $(POVRAY_ARGS) > log/frame_$*.log 2>&1 \
 	  || { tail -n 20 log/frame_$*.log >&2; rm -f ../png/.frame_$*.tmp.png; exit 1; }
 	mv -f png/.frame_$*.tmp.png $@
 

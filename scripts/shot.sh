@@ -4,6 +4,7 @@
 #
 #   scripts/shot.sh SCENE.toml OUTDIR [--preset NAME] [--set KEY=VALUE]... [--frames A:B]
 #                   [--max-frames N] [-j JOBS] [--no-video] [--no-run]
+#                   [--slurm [SUBMIT_OPTION | SBATCH_OPTION]...]
 #
 # It writes OUTDIR/Makefile (see scripts/shot.mk) and runs make in OUTDIR, so a second run
 # re-does only what changed (a scene section, the look, a deleted file), and
@@ -19,14 +20,19 @@
 #   -j JOBS           frames in flight (default: the number of cores)
 #   --no-video        stop after the PNGs
 #   --no-run          write OUTDIR/Makefile and stop (run make -C OUTDIR yourself)
+#   --slurm ...       submit the shot to Slurm instead of running make here (last option:
+#                     the words after it are scripts/slurm/submit.sh's options, such as
+#                     --sim-cpus N, --frame-mem MB, --max-parallel K, --dry-run, and any
+#                     other word is an option for every sbatch, e.g. --partition=render)
 # Environment: FERRO_BIN (default: build/bin of this checkout), POVRAY_ARGS (extra povray
 # options per frame, e.g. '+W320 +H240').
 set -euo pipefail
 root="$(cd "$(dirname "$0")/.." && pwd)"
-usage() { sed -n '2,27s/^# \{0,1\}//p' "$0"; }
+usage() { sed -n '2,32s/^# \{0,1\}//p' "$0"; }
 die() { echo "shot.sh: error: $*" >&2; exit 2; }
 
 scene="" out="" frames="" max_frames="" jobs="$(nproc)" video=1 run=1 preset="" sets=() set_args=()
+slurm=0 submit_args=() sbatch_args=()
 # A --set KEY=VALUE: a dotted key and a plain TOML scalar or array, nothing make or the shell
 # would read differently (no spaces, quotes or $).
 add_set() {
@@ -43,6 +49,15 @@ while [[ $# -gt 0 ]]; do
     -j) jobs="${2:?-j needs a number}"; shift 2 ;;
     -j*) jobs="${1#-j}"; shift ;;
     --no-video) video=0; shift ;;
+    --slurm) slurm=1; shift
+      while [[ $# -gt 0 ]]; do
+        case "$1" in
+          --sim-cpus|--sim-mem|--sim-time|--frame-cpus|--frame-mem|--frame-time|--max-parallel)
+            submit_args+=("$1" "${2:?$1 needs a value}"); shift 2 ;;
+          --dry-run) submit_args+=("$1"); shift ;;
+          *) sbatch_args+=("$1"); shift ;;
+        esac
+      done ;;
     -h|--help) usage; exit 0 ;;
     -*) die "unknown option $1 (see --help)" ;;
     *) if [[ -z "$scene" ]]; then scene="$1"; elif [[ -z "$out" ]]; then out="$1"; else die "unexpected argument $1"; fi; shift ;;
@@ -113,6 +128,9 @@ mv -f "$out/Makefile.tmp" "$out/Makefile"
 if [[ $run == 0 ]]; then
   echo "shot.sh: wrote $out/Makefile${preset:+ (preset $preset)}; run: make -C $out -j$jobs" >&2
   exit 0
+fi
+if [[ $slurm == 1 ]]; then
+  exec "$root/scripts/slurm/submit.sh" "$out" "$first_render" "$last_render" "${submit_args[@]}" -- "${sbatch_args[@]}"
 fi
 start=$SECONDS
 echo "shot.sh: $scene -> $out: frames $first_render..$last_render of 0..$last, spikes $([[ $spikes == 1 ]] && echo on || echo off), $jobs jobs${preset:+, preset $preset}" >&2

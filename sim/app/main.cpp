@@ -7,7 +7,13 @@
 #include "sim/scene/SimSceneFile.hpp"
 #include "sim/app/ShotRunner.hpp"
 
+#include "sim/sph/FluidSeed.hpp"
+
 #include <CLI/CLI.hpp>
+
+#include <algorithm>
+#include <cmath>
+#include <iostream>
 
 int main(int argc, char** argv) {
     using namespace ferro;
@@ -16,10 +22,13 @@ int main(int argc, char** argv) {
     RunOptions opt;
     std::vector<std::string> overrides;
     int threads = -1;
-    bool printInputs = false;
+    bool printInputs = false, printSize = false;
     app.add_option("scene", scenePath, "scene file (TOML)")->required();
     auto* out = app.add_option("--out,-o", opt.outDir, "output directory for particle files");
-    addSceneInputsFlag(app, printInputs, {out});
+    addSceneInputsFlag(app, printInputs, {out}, {&printSize});
+    app.add_flag("--print-size", printSize,
+                 "print the run's estimated size (particles, boundary particles, peak bytes, frames) as "
+                 "key=value words and exit: for schedulers (scripts/slurm/)");
     addSetOption(app, overrides, "override a scene key by its TOML path: --set section.key=value");
     app.add_option("--max-frames", opt.maxFrames, "stop after writing frame N (N frames after the initial one)")
         ->check(CLI::NonNegativeNumber);
@@ -40,6 +49,16 @@ int main(int argc, char** argv) {
         if (printInputs)
             return printSceneInputs(doc, [](const SceneDocument& d) { parseSimScene(d); });
         const SimScene scene = parseSimScene(doc);
+        if (printSize) {
+            const RunSize size = estimateRunSize(scene);
+            const int lastFrame = opt.maxFrames >= 0 ? std::min(opt.maxFrames, scene.shot.frameCount())
+                                                     : scene.shot.frameCount();
+            std::cout << "particles=" << std::llround(size.fluidParticles)
+                      << " boundary_particles=" << std::llround(size.boundaryParticles)
+                      << " bytes=" << std::llround(size.bytes) << " spacing=" << size.spacing << " frames=" << lastFrame + 1
+                      << " fps=" << scene.shot.fps << " preroll=" << scene.shot.preroll << "\n";
+            return kExitOk;
+        }
         opt.fingerprint = doc.fingerprint();
         opt.prerollFingerprint = doc.fingerprint({"fluid", "container", "sim", "magnetization"});
         const auto limit = limitThreads(threads >= 0 ? threads : scene.solver.threads);

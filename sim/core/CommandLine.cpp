@@ -57,12 +57,16 @@ CLI::Option* addSetOption(CLI::App& app, std::vector<std::string>& overrides, co
     return app.add_option("--set", overrides, help)->type_name("KEY=VALUE");
 }
 
-CLI::Option* addSceneInputsFlag(CLI::App& app, bool& flag, const std::vector<CLI::Option*>& requiredOtherwise) {
+CLI::Option* addSceneInputsFlag(CLI::App& app, bool& flag, const std::vector<CLI::Option*>& requiredOtherwise,
+                                const std::vector<const bool*>& queries) {
     for (CLI::Option* o : requiredOtherwise)
         o->description(o->get_description() + " (required)");
-    app.final_callback([&flag, requiredOtherwise] {
+    app.final_callback([&flag, requiredOtherwise, queries] {
         if (flag)
             return;
+        for (const bool* q : queries)
+            if (*q)
+                return;
         for (CLI::Option* o : requiredOtherwise)
             if (o->count() == 0)
                 throw CLI::RequiredError(o->get_name());

@@ -85,9 +85,11 @@ CLI::Option* addSetOption(CLI::App& app, std::vector<std::string>& overrides, co
 /// Adds the flag --print-scene-inputs: the stage parses its scene (after --set) and prints
 /// every key it read, SceneDocument::readsText, instead of running; scripts/shot.mk stamps
 /// each stage with that text, so the stage's own parser is the one list of what it reads.
-/// The options in `requiredOtherwise` are required except with this flag (CLI11's
-/// ->required() cannot say "unless"); their help lines say so.
-CLI::Option* addSceneInputsFlag(CLI::App& app, bool& flag, const std::vector<CLI::Option*>& requiredOtherwise);
+/// The options in `requiredOtherwise` are required except with this flag or one of the
+/// stage's other query flags `queries` (CLI11's ->required() cannot say "unless"); their
+/// help lines say so.
+CLI::Option* addSceneInputsFlag(CLI::App& app, bool& flag, const std::vector<CLI::Option*>& requiredOtherwise,
+                                const std::vector<const bool*>& queries = {});
 
 /// Turns on doc's read log, runs `parse` on it and prints the keys it read to stdout
 /// (--print-scene-inputs); returns kExitOk.
