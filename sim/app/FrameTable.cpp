@@ -8,7 +8,27 @@
 
 namespace ferro {
 
-ParticleTable frameTable(const FluidSimulation& sim, int frame, const std::string& fingerprint) {
+namespace {
+
+/// The compact cache's columns (ParticleCache::Compact): positions as floats, the rest quantized.
+ParticleTable compactTable(const ParticleTable& full) {
+    ParticleTable t;
+    t.names = {"x", "y", "z", "vx", "vy", "vz", "density", "mx", "my", "mz"};
+    t.quantized = {"vx", "vy", "vz", "density", "mx", "my", "mz"};
+    std::vector<int> from;
+    for (const std::string& n : t.names) from.push_back(full.column(n));
+    const size_t n = full.rows(), cols = t.names.size();
+    t.values.resize(n * cols);
+    for (size_t i = 0; i < n; ++i)
+        for (size_t c = 0; c < cols; ++c) t.values[i * cols + c] = full.at(i, from[c]);
+    t.comments = full.comments;
+    t.setComment("cache", "compact");
+    return t;
+}
+
+} // namespace
+
+ParticleTable frameTable(const FluidSimulation& sim, int frame, const std::string& fingerprint, bool compact) {
     ParticleTable t;
     t.names = {"x", "y", "z", "vx", "vy", "vz", "density", "pressure", "hx", "hy", "hz", "mx", "my", "mz"};
     const auto x = sim.positionsById();
@@ -62,7 +82,7 @@ ParticleTable frameTable(const FluidSimulation& sim, int frame, const std::strin
             line += (line.empty() ? "" : " ") + num(d);
         t.setComment("magnetization_curve", line);
     }
-    return t;
+    return compact ? compactTable(t) : t;
 }
 
 FrameState frameState(const ParticleTable& t) {

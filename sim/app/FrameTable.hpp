@@ -17,7 +17,9 @@ class FluidSimulation;
 /// spacing, support_radius, particle_mass, rest_density, scene, scene_fingerprint, the magnets
 /// at the current time with the fluid's law, magnetization_interval, and magnetization_curve:
 /// the free-surface curve's hLo hHi c0 c1 c2 C and the time of its fit, when there is one).
-ParticleTable frameTable(const FluidSimulation& sim, int frame, const std::string& fingerprint);
+/// `compact`: only what the later stages read (x y z vx vy vz density mx my mz), v, density
+/// and M quantized to 16 bits, and `comment cache compact` (not a frame to resume from).
+ParticleTable frameTable(const FluidSimulation& sim, int frame, const std::string& fingerprint, bool compact = false);
 
 /// The simulation state a particle file holds, in id order: what FluidSimulation::setState
 /// takes to continue from it (resume, the pre-roll cache).

@@ -132,6 +132,8 @@ void runShot(const SimScene& scene, const RunOptions& opt) {
             std::cerr << "ferro-sim: warning: skipping unreadable " << e.what() << "\n";
             continue;
         }
+        if (t.comment("cache") == "compact")
+            continue; // a compact frame holds no full state: resume from an earlier full one
         if (t.commentNumber("frame", -1) != *it) {
             std::cerr << "ferro-sim: warning: skipping " << particleFramePath(opt.outDir, *it)
                       << ": its header says frame " << t.comment("frame", "(none)") << "\n";
@@ -200,7 +202,8 @@ void runShot(const SimScene& scene, const RunOptions& opt) {
         const size_t stepsBefore = sim.stepCount();
         sim.resetMagneticsCounters();
         sim.advanceTo(frame / fps);
-        writeParticleFile(particleFramePath(opt.outDir, frame), frameTable(sim, frame, opt.fingerprint));
+        writeParticleFile(particleFramePath(opt.outDir, frame),
+                          frameTable(sim, frame, opt.fingerprint, !scene.shot.fullFrame(frame, lastFrame)));
         warnAboutSolverCap(sim, frame, capWarned);
         if (!opt.quiet) {
             const double now = std::chrono::duration<double>(Clock::now() - start).count();

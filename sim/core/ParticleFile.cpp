@@ -7,6 +7,8 @@
 
 #include <algorithm>
 #include <cctype>
+#include <cmath>
+#include <cstdint>
 #include <charconv>
 #include <cstdio>
 #include <cstring>
@@ -185,21 +187,24 @@ void readAscii(std::istream& in, const std::string& path, Header& h) {
 // Writer
 // ---------------------------------------------------------------------------------------
 
-std::string makeHeader(const std::string& path, const ParticleTable& table) {
+/// `comments`: the lines to write instead of table.comments (null: the table's).
+std::string makeHeader(const std::string& path, const ParticleTable& table,
+                       const std::vector<std::pair<std::string, std::string>>* comments = nullptr) {
     const size_t cols = table.columns();
     if (cols == 0 ? !table.values.empty() : table.values.size() % cols != 0)
         fail(path, std::to_string(table.values.size()) + " values do not fill rows of " +
                        std::to_string(cols) + " columns");
     std::string header;
     try {
-        header = binaryPlyHeaderStart(table.comments);
+        header = binaryPlyHeaderStart(comments ? *comments : table.comments);
     } catch (const std::invalid_argument& e) {
         fail(path, e.what());
     }
     header += "element vertex " + std::to_string(table.rows()) + "\n";
     for (const std::string& name : table.names) {
         if (name.empty() || hasSpace(name)) fail(path, "bad property name '" + name + "'");
-        header += "property float " + name + "\n";
+        const bool q = std::find(table.quantized.begin(), table.quantized.end(), name) != table.quantized.end();
+        header += std::string(q ? "property short " : "property float ") + name + "\n";
     }
     header += "end_header\n";
     return header;
@@ -258,12 +263,74 @@ std::vector<Vec3> ParticleTable::vec3(const std::string& a, const std::string& b
     return out;
 }
 
+namespace {
+
+/// The comment lines to write: the table's, with a scale line per quantized column (older
+/// ones dropped); scales[c] > 0 for a quantized column, 0 for a float one.
+std::vector<std::pair<std::string, std::string>> withScales(const std::string& path, const ParticleTable& table,
+                                                            std::vector<float>& scales) {
+    std::vector<std::pair<std::string, std::string>> out;
+    for (const auto& c : table.comments)
+        if (c.first != "quantized") out.push_back(c);
+    const size_t cols = table.columns(), rows = table.rows();
+    scales.assign(cols, 0.0f);
+    for (const std::string& name : table.quantized) {
+        const int c = table.column(name);
+        if (c < 0) fail(path, "quantized column '" + name + "' is not a column");
+        float maxAbs = 0;
+        for (size_t r = 0; r < rows; ++r) {
+            const float v = table.at(r, c);
+            if (!std::isfinite(v)) fail(path, "column '" + name + "' holds " + std::to_string(v) + ": cannot quantize it");
+            maxAbs = std::max(maxAbs, std::fabs(v));
+        }
+        const float scale = maxAbs > 0 ? maxAbs / 32767.0f : 1.0f;
+        scales[size_t(c)] = scale;
+        char text[64];
+        std::snprintf(text, sizeof text, "%s %.9g", name.c_str(), double(scale));
+        out.emplace_back("quantized", text);
+    }
+    return out;
+}
+
+} // namespace
+
 void writeParticleFile(const std::string& path, const ParticleTable& table) {
-    const std::string header = makeHeader(path, table);
+    std::vector<float> scales;
+    const auto comments = table.quantized.empty() ? table.comments : withScales(path, table, scales);
+    const std::string header = makeHeader(path, table, &comments);
     const size_t count = table.values.size();
+    const size_t cols = table.columns();
     try {
         writeFileAtomically(path, [&](std::ostream& out) {
             out.write(header.data(), static_cast<std::streamsize>(header.size()));
+            if (!table.quantized.empty()) {
+                // Mixed rows (floats and shorts), little-endian, through a bounded buffer.
+                std::vector<unsigned char> chunk;
+                const size_t rows = table.rows();
+                constexpr size_t chunkRows = 1 << 14;
+                for (size_t r0 = 0; r0 < rows && out; r0 += chunkRows) {
+                    chunk.clear();
+                    for (size_t r = r0; r < std::min(rows, r0 + chunkRows); ++r)
+                        for (size_t c = 0; c < cols; ++c) {
+                            const float v = table.values[r * cols + c];
+                            unsigned char b[4];
+                            if (scales[c] > 0) {
+                                const long q = std::clamp(std::lround(double(v) / double(scales[c])), -32767L, 32767L);
+                                const uint16_t u = static_cast<uint16_t>(static_cast<int16_t>(q));
+                                b[0] = static_cast<unsigned char>(u & 0xff);
+                                b[1] = static_cast<unsigned char>(u >> 8);
+                                chunk.insert(chunk.end(), b, b + 2);
+                            } else {
+                                uint32_t u;
+                                std::memcpy(&u, &v, 4);
+                                for (int k = 0; k < 4; ++k) b[k] = static_cast<unsigned char>(u >> (8 * k));
+                                chunk.insert(chunk.end(), b, b + 4);
+                            }
+                        }
+                    out.write(reinterpret_cast<const char*>(chunk.data()), static_cast<std::streamsize>(chunk.size()));
+                }
+                return;
+            }
             if (hostIsLittleEndian()) {
                 out.write(reinterpret_cast<const char*>(table.values.data()),
                           static_cast<std::streamsize>(count * sizeof(float)));
@@ -291,6 +358,21 @@ ParticleTable readParticleFile(const std::string& path) {
     Header h = readHeader(in, path);
     if (h.format == PlyFormat::Ascii) readAscii(in, path, h);
     else readBinary(in, path, h);
+    // Quantized columns (ParticleTable::quantized): back to their values; the comments that
+    // described the encoding go, so that a table written again is not scaled twice.
+    ParticleTable& t = h.table;
+    std::vector<std::pair<std::string, std::string>> kept;
+    for (const auto& [key, value] : t.comments) {
+        if (key != "quantized") { kept.emplace_back(key, value); continue; }
+        const size_t space = value.find(' ');
+        double scale = 0;
+        const int c = space == std::string::npos ? -1 : t.column(value.substr(0, space));
+        if (c < 0 || !parseDouble(value.substr(space + 1), scale) || !(scale > 0) || !std::isfinite(scale))
+            fail(path, "bad 'comment quantized " + value + "' (expected a column and a scale > 0)");
+        const float s = static_cast<float>(scale);
+        for (size_t r = 0; r < t.rows(); ++r) t.values[r * t.columns() + size_t(c)] *= s;
+    }
+    t.comments = std::move(kept);
     return std::move(h.table);
 }
 

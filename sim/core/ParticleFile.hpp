@@ -29,6 +29,12 @@ struct ParticleTable {
     std::vector<std::string> names;              ///< property names, in file order
     std::vector<float> values;                   ///< row-major: values[row * names.size() + col]
     std::vector<std::pair<std::string, std::string>> comments; ///< `comment key value` lines, in order
+    /// Columns the writer stores as 16-bit integers (PLY `short`) with a scale of the
+    /// column's largest magnitude / 32767, named in a `comment quantized NAME SCALE` line:
+    /// half the bytes of a float, an absolute error up to half a step (1.5e-5 of the
+    /// frame's largest value of that column). readParticleFile applies the scale and drops
+    /// those comment lines, so a table read back holds plain floats and an empty list.
+    std::vector<std::string> quantized;
 
     size_t rows() const { return names.empty() ? 0 : values.size() / names.size(); }
     size_t columns() const { return names.size(); }

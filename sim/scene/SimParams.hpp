@@ -123,6 +123,19 @@ struct ShotParams {
     /// once per frame interval, after the fluid has had time to fall the container's
     /// height); 0 = always run the whole pre-roll.
     double prerollRestSpeed = 1e-3;
+    /// What each particle file holds. Full: the whole state as floats (x, v, density,
+    /// pressure, H, M: 56 bytes a particle), every frame a point to resume from. Compact:
+    /// what the later stages read, x as floats and v, density and M quantized to 16 bits
+    /// (ParticleTable::quantized: 26 bytes a particle, an error up to 1.5e-5 of each column's
+    /// largest value in the frame), and every `fullEvery`-th frame and the last one full, so
+    /// that ferro-sim --resume goes back at most that many frames.
+    enum class ParticleCache { Full, Compact };
+    ParticleCache particleCache = ParticleCache::Full;
+    int fullEvery = 10;               ///< with Compact: every this many frames a full one, >= 1
+    /// Whether frame `frame` of a shot whose last frame is `last` is written in full.
+    bool fullFrame(int frame, int last) const {
+        return particleCache == ParticleCache::Full || frame % fullEvery == 0 || frame == last;
+    }
     /// Frames after frame 0, rounded; at most kMaxFrame (the parser refuses longer shots),
     /// so the cast never overflows an int whatever the fields hold.
     int frameCount() const {

@@ -35,6 +35,10 @@ ShotParams parseShot(const SceneDocument& doc)
     p.duration = r.positive("duration", p.duration);
     p.preroll = r.nonNegative("preroll", p.preroll);
     p.prerollRestSpeed = r.nonNegative("preroll_rest_speed", p.prerollRestSpeed);
+    p.particleCache = r.choice("particle_cache", {"full", "compact"}, "full") == "compact"
+                          ? ShotParams::ParticleCache::Compact
+                          : ShotParams::ParticleCache::Full;
+    p.fullEvery = r.integerInRange("full_every", p.fullEvery, 1, kMaxFrame);
     // Frame numbers are ints with seven digits in file names: blame the key that is
     // further from its default (the one the user most likely set).
     const double frames = p.duration * p.fps;
