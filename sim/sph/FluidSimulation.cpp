@@ -243,7 +243,9 @@ void FluidSimulation::setUpSurfaceTension() {
     // curvature terms scales as sigma / (rho0 s^2). Akinci's model has no physical
     // coefficient; kSurfaceTensionCalibration is measured on a free droplet (radius 11
     // spacings, zero gravity) so that its interior pressure grows with sigma as the Laplace
-    // pressure 2 sigma / R (tests/sim/sph/test_SurfaceTension.cpp checks it within 25 %).
+    // pressure 2 sigma / R. Only there: at other radii the slope stays ~175 /m instead of
+    // 2 / R, and a droplet oscillates ~4x slower than Rayleigh's period (both measured by the
+    // hidden [known-failure] cases of tests/sim/sph/test_SurfaceTension.cpp).
     constexpr double kSurfaceTensionCalibration = 0.0029;
     gamma_ = kSurfaceTensionCalibration * scene_.fluid.surfaceTension / (rho0_ * spacing_ * spacing_);
     // Capillary wave time step limit (Brackbill et al. 1992).

@@ -186,19 +186,17 @@ TEST_CASE("shot.sh renders a tiny shot, and make re-runs exactly the stale frame
     REQUIRE(run(make + "-j2 frames").code == 0);
 
     // The farm: frames 1..2 again on "this machine" through GNU parallel ("01": leading zeros
-    // are decimal, not octal).
-    if (run("command -v parallel").code) {
-        WARN("GNU parallel is not installed: farm.sh not tested");
-    } else {
-        fs::remove(out / "png" / "frame_0001.png");
-        fs::remove(out / "png" / "frame_0002.png");
-        res = run("'" + kSource + "/scripts/farm.sh' '" + out.string() + "' --frames 01:02 --sshlogin : --no-video");
-        INFO(res.output);
-        REQUIRE(res.code == 0);
-        CHECK(fs::exists(out / "png" / "frame_0001.png"));
-        CHECK(fs::exists(out / "png" / "frame_0002.png"));
-        CHECK(run(make + "-q frames").code == 0);
-    }
+    // are decimal, not octal). GNU parallel is one of the packages install-deps installs: a
+    // machine without it fails here rather than skipping the farm.
+    REQUIRE(run("command -v parallel").code == 0);
+    fs::remove(out / "png" / "frame_0001.png");
+    fs::remove(out / "png" / "frame_0002.png");
+    res = run("'" + kSource + "/scripts/farm.sh' '" + out.string() + "' --frames 01:02 --sshlogin : --no-video");
+    INFO(res.output);
+    REQUIRE(res.code == 0);
+    CHECK(fs::exists(out / "png" / "frame_0001.png"));
+    CHECK(fs::exists(out / "png" / "frame_0002.png"));
+    CHECK(run(make + "-q frames").code == 0);
 
     // A [fluid] edit whose simulation fails (here a stand-in ferro-sim that writes one broken
     // frame and exits 3): the previous simulation's frames stay where they were.
