@@ -30,7 +30,8 @@
 # Not matched (stated in peer.md): SPlisHSPlasH's particle volume is 0.8 d^3 (a fixed
 # factor of its fluid model), so its fluid is the same lattice at 0.928 d (0.8 of Ferro's
 # volume, at rest density: see peer_scene) and has 1.25x Ferro's neighbours a particle;
-# it is compiled with -march=native (AVX2), Ferro for generic x86-64; both in
+# it is compiled with -march=native (AVX2), Ferro for generic x86-64 unless FERRO_BIN is a
+# FERRO_NATIVE=ON build (peer.md says which); both in
 # single precision; OpenMP against TBB.
 #
 # The density error each code reaches is measured one way for both: the mean compression
@@ -71,6 +72,10 @@ peer_version="$("$peer_sim" --version 2>/dev/null | head -n 1)"
 
 root="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
 bin="${FERRO_BIN:-$root/build/bin}"
+# Whether FERRO_BIN is a build tuned for this processor (CMake option FERRO_NATIVE), as
+# SPlisHSPlasH's own build is (-march=native): the report says which comparison it is.
+ferro_native=0
+grep -qs '^FERRO_NATIVE:BOOL=ON' "$bin/../CMakeCache.txt" && ferro_native=1
 [[ -x "$bin/bench-sim" ]] || die 4 "$bin/bench-sim: not built (cmake --build build --target bench-sim)"
 seconds="${PEER_SECONDS:-$([[ "${BENCH_QUICK:-0}" == 1 ]] && echo 0.02 || echo 0.05)}"
 # The WCSPH pair is shorter: SPlisHSPlasH's WCSPH steps cost ~5x Ferro's here (its
@@ -336,9 +341,14 @@ col() { awk -F, -v row="$1" -v name="$2" 'NR == 1 { for (i = 1; i <= NF; ++i) c[
   echo "  0.8 d^3 (fixed in its fluid model), so it gets Ferro's 32 x 32 x 40 lattice at 0.928 d from a"
   echo "  particle file (its own blocks at d start 20 % under-dense and need no pressure for ~20 ms)."
   echo "- Not matched: its fluid has 0.8 of Ferro's volume and ~1.25x Ferro's neighbours per particle;"
-  echo "  it is built with -march=native (AVX2 kernels), Ferro for generic"
-  echo "  x86-64 (SSE2); its threads are OpenMP (passive waiting) against Ferro's TBB, and OpenMP"
-  echo "  suffers more on this oversubscribed machine."
+  if [[ "$ferro_native" == 1 ]]; then
+    echo "  both are built for this processor (-march=native: SPlisHSPlasH's AVX kernels, Ferro's"
+    echo "  FERRO_NATIVE=ON); its threads are OpenMP (passive waiting) against Ferro's TBB."
+  else
+    echo "  it is built with -march=native (AVX2 kernels), Ferro for generic"
+    echo "  x86-64 (SSE2); its threads are OpenMP (passive waiting) against Ferro's TBB, and OpenMP"
+    echo "  suffers more on this oversubscribed machine."
+  fi
 } > "$out/peer.md"
 
 if [[ -x "$root/scripts/bench/plot.sh" ]]; then

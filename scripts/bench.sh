@@ -11,7 +11,8 @@
 #   --only AREAS   run only these areas (the other sections already in OUT_DIR are kept)
 #   --no-build     skip scripts/build.sh (use FERRO_BIN or build/bin as they are)
 #   --assemble     run no area: only rewrite OUT_DIR/README.md from the sections in OUT_DIR
-# Areas, in order: sim scaling magnetics surface spikes render scene-cost still-frames peer (scripts/bench/<area>.sh;
+# Areas, in order: sim scaling magnetics surface spikes render scene-cost still-frames peer million
+# slurm (scripts/bench/<area>.sh; million takes ~30 min, slurm needs --with-slurm;
 # peer needs FERRO_PEER_SRC=/path/to/SPlisHSPlasH and otherwise prints why it is skipped).
 # Environment: BENCH_QUICK=1 (tiny sizes: checks the scripts in minutes, not for the report),
 # FERRO_BIN, FERRO_PEER_SRC. Needs gnuplot (scripts/install-deps.sh --with-bench).
@@ -19,7 +20,7 @@
 set -euo pipefail
 root="$(cd "$(dirname "$0")/.." && pwd)"
 die() { echo "bench.sh: error: $2" >&2; exit "$1"; }
-all_areas=(sim scaling magnetics surface spikes render scene-cost still-frames peer)
+all_areas=(sim scaling magnetics surface spikes render scene-cost still-frames peer million slurm)
 
 out="" only="" build=1 assemble=0
 while [[ $# -gt 0 ]]; do
@@ -27,7 +28,7 @@ while [[ $# -gt 0 ]]; do
     --only) only="${2:?--only needs AREA[,AREA...]}"; shift 2 ;;
     --no-build) build=0; shift ;;
     --assemble) build=0; assemble=1; shift ;;
-    -h|--help) sed -n '2,22s/^# \{0,1\}//p' "$0"; exit 0 ;;
+    -h|--help) sed -n '2,23s/^# \{0,1\}//p' "$0"; exit 0 ;;
     -*) die 2 "unknown option $1 (see --help)" ;;
     *) [[ -z "$out" ]] || die 2 "unexpected argument $1"; out="$1"; shift ;;
   esac

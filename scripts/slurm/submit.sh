@@ -67,14 +67,17 @@ SPIKES='$SPIKES'
 ENV
 
 # ---- cost model ----------------------------------------------------------------------------
-# Measured on the project's 2-core machine (tests/bench/report: scene_cost.csv, surface.md,
-# spikes_presets.csv, render.md), in CPU seconds:
-#   simulation  7 us a particle and step with magnets (68.7 ms a step at 10,240 particles),
-#               about 1,000 steps a simulated second (dt near 1 ms), the pre-roll included;
-#               memory: ferro-sim's own estimate (--print-size bytes, 3 kB a particle);
-#   surface     35 us a particle (0.32 s at 10,240, voxel half a spacing);
-#   spikes      300 us a particle (preset final: 3.0 s at 10,240);
-#   render      60 s a frame at the presets' 640 x 480 (POV-Ray, quality 9, antialiased).
+# Measured on the project's 2-core machine, in CPU seconds (tests/bench/report: million.md at
+# 1,000,000 particles, scene_cost.csv and spikes_presets.csv at 10,240):
+#   simulation  20 us a particle and step (1,000,000 particles with a magnet, the poured layer
+#               settling: 10.5 s a step on 2 cores; 7 us at 10,240, whose layers are shallower),
+#               1,400 steps a simulated second, the pre-roll included; memory: ferro-sim's own
+#               estimate (--print-size bytes, 3 kB a particle; measured 2.4 kB at 1,000,000);
+#   surface     8 us a particle (8 s at 1,000,000);
+#   spikes      3 s plus 10 us a particle (10 s at 1,000,000 with 199 tips, 3 s at 10,240);
+#   render      60 s a frame at the presets' 640 x 480 (14 s at 1,000,000 with the scene's own
+#               settings; the final preset's antialiasing costs more);
+#   memory      1 kB a particle for the per-frame stages (spikes: 890 MB at 1,000,000).
 # A time limit is 3x the estimate on the cores asked for plus 10 minutes (a shared node, a
 # slow file system); memory 1.5x plus 512 MB. Each can be overridden.
 read -r -a size < <("$FERRO_BIN/ferro-sim" "$SCENE" --print-size ${MAX_FRAMES:+--max-frames "$MAX_FRAMES"} $SETS)
@@ -83,12 +86,12 @@ n="${S[particles]}" frames="${S[frames]}" fps="${S[fps]}" preroll="${S[preroll]}
 sim_cpus="${sim_cpus:-$(( $(nproc) < 8 ? $(nproc) : 8 ))}"
 frame_cpus="${frame_cpus:-$(( n > 500000 ? 2 : 1 ))}"
 est() { awk "BEGIN { printf \"%d\", $1 }"; }
-sim_seconds="$(est "7e-6 * $n * 1000 * ($frames / $fps + $preroll) / $sim_cpus")"
-frame_seconds="$(est "((35e-6 + ($SPIKES == 1 ? 300e-6 : 0)) * $n + 60) / $frame_cpus")"
+sim_seconds="$(est "20e-6 * $n * 1400 * ($frames / $fps + $preroll) / $sim_cpus")"
+frame_seconds="$(est "(8e-6 * $n + ($SPIKES == 1 ? 3 + 10e-6 * $n : 0) + 60) / $frame_cpus")"
 sim_time="${sim_time:-$(( (3 * sim_seconds) / 60 + 10 ))}"
 frame_time="${frame_time:-$(( (3 * frame_seconds) / 60 + 10 ))}"
 sim_mem="${sim_mem:-$(est "1.5 * $bytes / 1048576 + 512")}"
-frame_mem="${frame_mem:-$(est "1.5 * 2500 * $n / 1048576 + 512")}"
+frame_mem="${frame_mem:-$(est "1.5 * 1000 * $n / 1048576 + 512")}"
 echo "submit.sh: $n particles, frames $first..$last of $SHOT_FIRST..$SHOT_LAST; estimates: simulation ${sim_seconds} s on $sim_cpus cores, a frame ${frame_seconds} s on $frame_cpus" >&2
 
 # ---- what is stale: make's own rule ----------------------------------------------------------
