@@ -73,7 +73,10 @@ scene_stamp = $(shell mkdir -p .scene && t=.scene/.$(1).$$$$ && \
 stamp_or_stop = $(if $(call scene_stamp,$(1),$(2),$(3)),$(error shot.mk: cannot read the scene for the $(1) stage (see the line above)))
 $(call stamp_or_stop,sim,$(FERRO_BIN)/ferro-sim '$(SCENE)' --print-scene-inputs $(SETS),max_frames=$(MAX_FRAMES))
 $(call stamp_or_stop,surface,$(FERRO_BIN)/ferro-surface --scene '$(SCENE)' --print-scene-inputs $(SETS),)
+# (ferro-spikes may not be built: shot.sh then sets SPIKES=0 and nothing needs its stamp.)
+ifeq ($(SPIKES),1)
 $(call stamp_or_stop,spikes,$(FERRO_BIN)/ferro-spikes --scene '$(SCENE)' --print-scene-inputs $(SETS),)
+endif
 $(call stamp_or_stop,export,$(FERRO_BIN)/ferro-pov --scene '$(SCENE)' --no-shot --print-scene-inputs $(SETS),)
 $(call stamp_or_stop,render,$(FERRO_BIN)/ferro-pov --scene '$(SCENE)' --shot-frames $(SHOT_FIRST):$(SHOT_LAST) --print-scene-inputs $(SETS),shot_frames=$(SHOT_FIRST):$(SHOT_LAST))
 

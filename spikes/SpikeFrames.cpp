@@ -3,7 +3,8 @@
 #include "sim/core/FrameRunner.hpp"
 
 #include "sim/magnetics/MagnetState.hpp"
-#include "sim/magnetics/MagnetizationSolver.hpp"
+#include "sim/magnetics/LangevinLaw.hpp"
+#include "sim/magnetics/MagnetizationSolver.hpp" // ParticleFieldEvaluator
 #include "sim/core/ParticleFile.hpp"
 #include "sim/core/SceneDocument.hpp"
 #include "sim/scene/SimSceneFile.hpp"

@@ -1,7 +1,7 @@
 #include "spikes/SpikePhysics.hpp"
 #include "sim/core/Constants.hpp"
 
-#include "sim/magnetics/MagnetizationSolver.hpp"
+#include "sim/magnetics/LangevinLaw.hpp"
 
 #include <cmath>
 #include <limits>

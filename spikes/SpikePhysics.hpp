@@ -10,7 +10,7 @@ namespace ferro {
 
 
 // The fluid's law M(H) is the simulator's: langevinMagnetization / langevinSlope in
-// sim/magnetics/MagnetizationSolver.hpp (paper eq. 5 with Langevin saturation).
+// sim/magnetics/LangevinLaw.hpp (paper eq. 5 with Langevin saturation).
 
 /// The threshold of the normal-field (Rosensweig) instability of a flat layer.
 struct CriticalMagnetization {

@@ -2,7 +2,7 @@
 #include "spikes/SurfaceFields.hpp"
 
 #include "sim/core/Constants.hpp"
-#include "sim/magnetics/MagnetizationSolver.hpp"
+#include "sim/magnetics/LangevinLaw.hpp"
 
 #include <cmath>
 

@@ -95,8 +95,8 @@ frame_mem="${frame_mem:-$(est "1.5 * 1000 * $n / 1048576 + 512")}"
 echo "submit.sh: $n particles, frames $first..$last of $SHOT_FIRST..$SHOT_LAST; estimates: simulation ${sim_seconds} s on $sim_cpus cores, a frame ${frame_seconds} s on $frame_cpus" >&2
 
 # ---- what is stale: make's own rule ----------------------------------------------------------
-# Stamps first (make rewrites .scene/*.toml at each run, and stops on a scene it cannot read).
-make -C "$out" --no-print-directory -q shot/shot.pov >/dev/null 2>&1 || true
+# The shot files first, here (every frame's render needs them; make also rewrites the stamps
+# .scene/*.toml, and stops on a scene a stage cannot read).
 make -s -C "$out" --no-print-directory shot/shot.pov shot/look.inc >/dev/null
 sim=0
 make -C "$out" --no-print-directory -q particles/.complete 2>/dev/null || sim=1
