@@ -7,6 +7,8 @@
 #   - Publishing follows shot.mk's rule: a frame that holds the same bytes as the previous
 #     run's (frame-unchanged.sh) keeps the previous file and its time, so its meshes and
 #     render are not redone.
+#   - particles.new/ holding frames of another scene (left by a failed or cancelled run before
+#     the scene was edited) is removed first, so none of them is ever published.
 #   - Requeued (node failure, preemption, scontrol requeue): the job starts again from the
 #     top, ferro-sim --resume continues after the last complete frame in particles.new/, and
 #     the frames published before are published again as no-ops.
@@ -60,28 +62,30 @@ threads=()
 [[ -n "${SLURM_CPUS_PER_TASK:-}" ]] && threads=(--threads "$SLURM_CPUS_PER_TASK")
 
 log "job ${SLURM_JOB_ID:-?} (restart ${SLURM_RESTART_COUNT:-0}) on $(hostname): ferro-sim ${args[*]} ${sets[*]}"
+# Resume only frames of this scene: particles.new/ left by a failed or cancelled run of an
+# earlier version of the scene goes first, before any of its frames could be published.
+# (ferro-sim --resume would refuse them too, but only after this job had published them.)
 have="$(ls particles.new 2>/dev/null | sed -n 's/^particles_0*\([0-9][0-9]*\)\.ply$/\1/p' | sort -n | tail -1)"
-[[ -n "$have" ]] && log "particles.new/ holds frames up to $have: ferro-sim resumes after the last complete one"
+if [[ -n "$have" ]]; then
+  want="$("$FERRO_BIN/ferro-sim" "$SCENE" --print-size "${sets[@]}" | tr ' ' '\n' | sed -n 's/^scene_fingerprint=//p')"
+  got="$(head -c 16384 "particles.new/particles_$(printf %04d "$have").ply" | sed -n 's/^comment scene_fingerprint //p' | head -1)"
+  if [[ -z "$want" || "$got" != "$want" ]]; then
+    log "particles.new/ holds frames of another scene ($got, this one is $want): starting over"
+    rm -rf particles.new
+    mkdir -p particles.new
+  else
+    log "particles.new/ holds frames up to $have: ferro-sim resumes after the last complete one"
+  fi
+fi
 # --resume continues after the newest complete frame of particles.new/ (a requeued job), or
-# starts when it is empty; frames of another scene there (an edit since) mean starting over.
-"$FERRO_BIN/ferro-sim" "${args[@]}" --resume "${threads[@]}" "${sets[@]}" 2> .slurm/sim.err &
+# starts when it is empty.
+"$FERRO_BIN/ferro-sim" "${args[@]}" --resume "${threads[@]}" "${sets[@]}" &
 pid=$!
 while kill -0 "$pid" 2>/dev/null; do
   publish_all
   sleep 1
 done
 wait "$pid"; rc=$?
-cat .slurm/sim.err >&2
-if [[ $rc == 2 ]] && grep -q -e "--overwrite" .slurm/sim.err; then
-  log "particles.new/ holds frames of another scene: starting over"
-  "$FERRO_BIN/ferro-sim" "${args[@]}" --overwrite "${threads[@]}" "${sets[@]}" &
-  pid=$!
-  while kill -0 "$pid" 2>/dev/null; do
-    publish_all
-    sleep 1
-  done
-  wait "$pid"; rc=$?
-fi
 publish_all
 if [[ $rc != 0 ]]; then
   log "ferro-sim failed (exit $rc): cancelling the frame tasks still waiting for their frames"

@@ -27,8 +27,9 @@ int main(int argc, char** argv) {
     auto* out = app.add_option("--out,-o", opt.outDir, "output directory for particle files");
     addSceneInputsFlag(app, printInputs, {out}, {&printSize});
     app.add_flag("--print-size", printSize,
-                 "print the run's estimated size (particles, boundary particles, peak bytes, frames) as "
-                 "key=value words and exit: for schedulers (scripts/slurm/)");
+                 "print the run's estimated size (particles, boundary particles, peak bytes, frames) and "
+                 "the scene fingerprint its frames carry, as key=value words, and exit: for "
+                 "schedulers (scripts/slurm/)");
     addSetOption(app, overrides, "override a scene key by its TOML path: --set section.key=value");
     app.add_option("--max-frames", opt.maxFrames, "stop after writing frame N (N frames after the initial one)")
         ->check(CLI::NonNegativeNumber);
@@ -56,7 +57,8 @@ int main(int argc, char** argv) {
             std::cout << "particles=" << std::llround(size.fluidParticles)
                       << " boundary_particles=" << std::llround(size.boundaryParticles)
                       << " bytes=" << std::llround(size.bytes) << " spacing=" << size.spacing << " frames=" << lastFrame + 1
-                      << " fps=" << scene.shot.fps << " preroll=" << scene.shot.preroll << "\n";
+                      << " fps=" << scene.shot.fps << " preroll=" << scene.shot.preroll
+                      << " scene_fingerprint=" << doc.fingerprint() << "\n";
             return kExitOk;
         }
         opt.fingerprint = doc.fingerprint();
