@@ -1,10 +1,10 @@
 #include "povray/PovExport.hpp"
 
 #include "sim/core/AtomicFile.hpp"
-#include "sim/magnetics/MagnetState.hpp"
+#include "sim/magnets/MagnetState.hpp"
 #include "sim/core/ParticleFile.hpp"
 #include "sim/core/SceneDocument.hpp"
-#include "sim/magnetics/MagnetScene.hpp"
+#include "sim/magnets/MagnetScene.hpp"
 #include "sim/scene/SimSceneFile.hpp"
 
 #include <algorithm>

@@ -28,7 +28,7 @@
 // Every file is written atomically; shot.pov and the .ini files are only replaced when their
 // text changes, so re-exporting frames does not make finished renders look stale to make.
 #include "povray/RenderParams.hpp"
-#include "sim/magnetics/MagnetField.hpp"
+#include "sim/magnets/MagnetField.hpp"
 #include "sim/scene/SimParams.hpp"
 #include "sim/core/StageErrors.hpp"
 #include "sim/core/TriangleMesh.hpp"

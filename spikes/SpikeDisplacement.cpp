@@ -63,7 +63,7 @@ WettedWall findWettedWall(const TriangleMesh& mesh, const SurfaceFields& fields,
     for (size_t v = 0; v < n; ++v)
         if (wetted[v]) wettedPoints.push_back(toD(mesh.vertices[v]));
     const double wallFade = P.wallFade > 0 ? P.wallFade : minSpacing;
-    return WettedWall{std::move(wetted), PointGrid(wettedPoints, wallFade), wallFade};
+    return WettedWall{std::move(wetted), HashGrid(wettedPoints, wallFade), wallFade};
 }
 
 double spikeDisplacement(const SpikeSurface& surface, const Vec3d& x, const Vec3d& nx, double& weight,

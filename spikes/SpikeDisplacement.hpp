@@ -34,7 +34,7 @@ Dominance patternDominance(const std::vector<Pattern>& patterns, const std::vect
 /// The wetted wall on the refined surface: never displaced, and heights fade in away from it.
 struct WettedWall {
     std::vector<char> wetted; ///< per vertex of the refined mesh: 1 = wetted wall
-    PointGrid grid;           ///< the wetted vertices [m]
+    HashGrid grid;           ///< the wetted vertices [m]
     double fade;              ///< heights ramp in over this distance from the wall [m]
 };
 

@@ -2,9 +2,9 @@
 
 #include "sim/core/FrameRunner.hpp"
 
-#include "sim/magnetics/MagnetState.hpp"
-#include "sim/magnetics/LangevinLaw.hpp"
-#include "sim/magnetics/MagnetizationSolver.hpp" // ParticleFieldEvaluator
+#include "sim/magnets/MagnetState.hpp"
+#include "sim/magnets/LangevinLaw.hpp"
+#include "sim/particlefield/ParticleField.hpp"
 #include "sim/core/ParticleFile.hpp"
 #include "sim/core/SceneDocument.hpp"
 #include "sim/scene/SimSceneFile.hpp"
@@ -132,7 +132,7 @@ void addMagnetHistory(const SpikeScene& scene, double time, SpikeInput& in)
 // The field [A/m] of the magnetized particles (positions x [m], magnetization M [A/m]) at a
 // point: each particle of volume m / rho = rho0 h^3 / rho (h = spacing [m], rho0 the fluid's
 // rest density, rho the file's `density` column where present) a smoothed dipole of the
-// scene's magnetization.smoothing (the simulator's model, sim/magnetics/DipoleTree.hpp),
+// scene's magnetization.smoothing (the simulator's model, sim/particlefield/DipoleTree.hpp),
 // summed by a tree (opening angle 0.6).
 std::function<Vec3d(const Vec3d&)> particleFieldOf(const ParticleTable& particles, const std::vector<Vec3>& x,
                                                    const std::vector<Vec3>& M, double spacing, double restDensity,

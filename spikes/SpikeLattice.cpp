@@ -44,7 +44,7 @@ public:
             centroids.push_back((a + b + c) / 3.0);
             areaNormals_.push_back(0.5 * (b - a).cross(c - a));
         }
-        grid_ = PointGrid(centroids, radius);
+        grid_ = HashGrid(centroids, radius);
     }
     /// The mean normal around x [m]; `fallback` (unit) where no free triangle is that close.
     Vec3d at(const Vec3d& x, const Vec3d& fallback) const
@@ -59,7 +59,7 @@ public:
 
 private:
     double radius_;
-    PointGrid grid_;
+    HashGrid grid_;
     std::vector<Vec3d> areaNormals_;
 };
 
@@ -257,7 +257,7 @@ void traceLattice(Pattern& pat, const FreeSurface& surface, const SurfaceFields&
     }
     std::vector<Vec3d> positions;
     for (const Tip& tip : pat.tips) positions.push_back(tip.position);
-    pat.grid = std::make_unique<PointGrid>(positions, l);
+    pat.grid = std::make_unique<HashGrid>(positions, l);
 }
 
 void settleSeams(std::vector<Pattern>& patterns, const std::vector<Magnet>& magnets)
@@ -309,7 +309,7 @@ void settleSeams(std::vector<Pattern>& patterns, const std::vector<Magnet>& magn
             tip.position += shift[p][t];
             positions.push_back(tip.position);
         }
-        patterns[p].grid = std::make_unique<PointGrid>(positions, patterns[p].info.spacing);
+        patterns[p].grid = std::make_unique<HashGrid>(positions, patterns[p].info.spacing);
     }
 }
 

@@ -2,7 +2,7 @@
 // The hexagonal lattice of spike tips on the fluid surface (paper section 4.3, Fig. 7, eq. 15):
 // the free surface the tips are dropped onto, one pattern's tips, and the tracing that lays
 // them out from the pattern's origin. Phase 3 of addSpikes. Internal to ferro_spikes.
-#include "spikes/PointGrid.hpp"
+#include "sim/spatial/HashGrid.hpp"
 #include "spikes/SpikeMapper.hpp"
 #include "spikes/SurfaceFields.hpp"
 #include "spikes/SurfaceGeometry.hpp"
@@ -47,7 +47,7 @@ struct Tip {
 struct Pattern {
     SpikePattern info;
     std::vector<Tip> tips;
-    std::unique_ptr<PointGrid> grid;
+    std::unique_ptr<HashGrid> grid;
 };
 
 /// Phase 3, the tips of Fig. 7 for a pattern whose info (origin x0 and normal n0 on the free

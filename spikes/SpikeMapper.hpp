@@ -25,8 +25,8 @@
 //     dominance |H_i|^2 / sum |H_j|^2, so they meet without cracks.
 //  6. Volume: a normal offset over the spiky region, weighted like the heights, restores the
 //     input's enclosed volume (the paper's first listed limitation).
-#include "sim/sph/Container.hpp"
-#include "sim/magnetics/MagnetField.hpp"
+#include "sim/geometry/Container.hpp"
+#include "sim/magnets/MagnetField.hpp"
 #include "sim/scene/SimParams.hpp"
 #include "spikes/SpikeParams.hpp"
 #include "spikes/SpikePhysics.hpp"

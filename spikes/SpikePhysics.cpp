@@ -1,7 +1,7 @@
 #include "spikes/SpikePhysics.hpp"
 #include "sim/core/Constants.hpp"
 
-#include "sim/magnetics/LangevinLaw.hpp"
+#include "sim/magnets/LangevinLaw.hpp"
 
 #include <cmath>
 #include <limits>

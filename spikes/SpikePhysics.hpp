@@ -2,7 +2,7 @@
 // The physics behind the spikes: the fluid's magnetization law, the Cowley-Rosensweig
 // critical magnetization (paper eq. 16) and wavelength, and the hexagonal height field of
 // eq. 13. Pure functions, SI units.
-#include "sim/magnetics/MagnetField.hpp"
+#include "sim/magnets/MagnetField.hpp"
 #include "sim/core/Constants.hpp"
 #include "sim/scene/SimParams.hpp"
 
@@ -10,7 +10,7 @@ namespace ferro {
 
 
 // The fluid's law M(H) is the simulator's: langevinMagnetization / langevinSlope in
-// sim/magnetics/LangevinLaw.hpp (paper eq. 5 with Langevin saturation).
+// sim/magnets/LangevinLaw.hpp (paper eq. 5 with Langevin saturation).
 
 /// The threshold of the normal-field (Rosensweig) instability of a flat layer.
 struct CriticalMagnetization {

@@ -33,7 +33,7 @@ void pinVerticesToTips(TriangleMesh& mesh, const std::vector<Pattern>& patterns,
     const size_t n = mesh.vertices.size();
     std::vector<Vec3d> points(n);
     for (size_t v = 0; v < n; ++v) points[v] = toD(mesh.vertices[v]);
-    const PointGrid grid(points, cell);
+    const HashGrid grid(points, cell);
     for (const Pattern& pat : patterns)
         for (const Tip& tip : pat.tips) {
             long nearest = -1;

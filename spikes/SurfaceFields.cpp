@@ -2,7 +2,7 @@
 #include "spikes/SurfaceFields.hpp"
 
 #include "sim/core/Constants.hpp"
-#include "sim/magnetics/LangevinLaw.hpp"
+#include "sim/magnets/LangevinLaw.hpp"
 
 #include <cmath>
 
@@ -28,7 +28,7 @@ SurfaceFields::SurfaceFields(const SpikeInput& in, const SpikeParams& p, double 
     if (!particles.magnetization.empty() && particles.magnetization.size() == particles.positions.size() &&
         spacing_ > 0) {
         radius_ = 2.0 * spacing_;
-        particleGrid_ = std::make_unique<PointGrid>(particles.positions, radius_);
+        particleGrid_ = std::make_unique<HashGrid>(particles.positions, radius_);
     }
     wallMargin_ = p.wallMargin > 0 ? p.wallMargin : (spacing_ > 0 ? 1.5 * spacing_ : 2e-3);
 }

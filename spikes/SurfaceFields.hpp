@@ -2,7 +2,7 @@
 // What addSpikes evaluates at a point of the fluid surface: the field H, the magnetization |M|,
 // the fades from the critical magnetization, the wetted wall, and the direction a spike grows.
 // Internal to ferro_spikes (SpikeMapper.cpp and the phase files beside it).
-#include "spikes/PointGrid.hpp"
+#include "sim/spatial/HashGrid.hpp"
 #include "spikes/SpikeMapper.hpp"
 
 #include <algorithm>
@@ -72,7 +72,7 @@ private:
     const SpikeParams& p_;
     double Mc_;
     double spacing_ = 0, radius_ = 0, wallMargin_ = 0;
-    std::unique_ptr<PointGrid> particleGrid_;
+    std::unique_ptr<HashGrid> particleGrid_;
 };
 
 } // namespace ferro

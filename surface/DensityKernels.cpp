@@ -2,7 +2,7 @@
 #include "surface/DensityKernels.hpp"
 #include "sim/core/Constants.hpp"
 
-#include "sim/sph/NeighborSearch.hpp"
+#include "sim/spatial/NeighborSearch.hpp"
 
 #include <Eigen/Eigenvalues>
 #include <tbb/blocked_range.h>

@@ -1,6 +1,6 @@
 #include "sim/app/FrameTable.hpp"
 
-#include "sim/magnetics/MagnetState.hpp"
+#include "sim/magnets/MagnetState.hpp"
 #include "sim/sph/FluidSimulation.hpp"
 
 #include <cmath>

@@ -3,7 +3,7 @@
 #include "sim/app/FrameTable.hpp"
 #include "sim/core/ParticleFile.hpp"
 #include "sim/core/SceneDocument.hpp"
-#include "sim/magnetics/MagnetState.hpp"
+#include "sim/magnets/MagnetState.hpp"
 #include "sim/sph/FluidSimulation.hpp"
 
 #include <algorithm>

@@ -4,7 +4,7 @@
 #include "sim/app/Preroll.hpp"
 
 #include "sim/sph/FluidSimulation.hpp"
-#include "sim/magnetics/MagnetState.hpp"
+#include "sim/magnets/MagnetState.hpp"
 #include "sim/core/ParticleFile.hpp"
 #include "sim/core/SceneDocument.hpp"
 

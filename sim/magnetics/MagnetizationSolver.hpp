@@ -4,7 +4,7 @@
 //
 // Model. Each particle i carries the moment V_i M_i spread over a Wendland C2 kernel of
 // support MagnetizationParams::smoothing * V_i^(1/3) (smoothed dipoles; smoothing = 0: a
-// uniformly magnetized sphere of volume V_i, the older model). sim/magnetics/DipoleTree.hpp
+// uniformly magnetized sphere of volume V_i, the older model). sim/particlefield/DipoleTree.hpp
 // has the closed-form field, why it gives the macroscopic field on disordered particle sets
 // and the surface term S_i. The field at particle i is
 //     H_i = H_ext(x_i) + sum_j G(x_i - x_j) V_j M_j - S_i M_i - D_i M_i   (j = i included: -W(0) V_i M_i / 3)
@@ -29,7 +29,7 @@
 // Solvers (MagnetizationParams::solver):
 //   External  M = M(H_ext) alone, O(N); error ~ the neglected particle field (~chi/(1+chi)).
 //   Direct    exact all-pairs products, O(N^2) per field evaluation: the reference.
-//   Tree      Barnes-Hut products (sim/magnetics/DipoleTree.hpp), opening angle theta = cell size /
+//   Tree      Barnes-Hut products (sim/particlefield/DipoleTree.hpp), opening angle theta = cell size /
 //             distance; at the default 0.5 see bench-magnetization for its error and speed
 //             against Direct on a 40,960-particle dish layer.
 //   Auto      External if its sampled error is under `tolerance`, else Direct up to
@@ -42,12 +42,13 @@
 // cap with a ~2e-2 residual at chi0 >= 3 on a jittered ball.
 //
 // Units: SI throughout (A/m, m, m^3); positions and results float, internals double.
-#include "sim/magnetics/DipoleTree.hpp"
-#include "sim/magnetics/MagnetField.hpp"
-#include "sim/magnetics/MagnetizationParams.hpp"
+#include "sim/particlefield/DipoleTree.hpp"
+#include "sim/particlefield/ParticleField.hpp"
+#include "sim/magnets/MagnetField.hpp"
+#include "sim/magnets/MagnetizationParams.hpp"
 #include "sim/core/Types.hpp"
 
-#include "sim/magnetics/LangevinLaw.hpp"
+#include "sim/magnets/LangevinLaw.hpp"
 
 #include <Eigen/Core>
 
@@ -131,48 +132,5 @@ private:
     std::vector<Real> surfaceWeight_;  // see surfaceWeight()
     std::vector<Vec3> surfaceNormal_;
 };
-
-/// Total or induced field anywhere from a saved particle state (positions, volumes, M as
-/// written to the particle files) plus the magnets: what ferro-spikes needs at surface
-/// points. The particle field uses the same particle model (smoothed dipoles or spheres) and
-/// tree as the solver: inducedField() is the field of the smoothed magnetization at any
-/// point; at particle i the solver's H is inducedFieldAtParticle(i) + magnetField(), which
-/// adds the surface sampling term of DipoleTree.hpp (zero inside the fluid).
-class ParticleFieldEvaluator {
-public:
-    /// Builds the tree. openingAngle 0 = exact sums (O(N) per point), default 0.5.
-    /// smoothing: the particle model, as MagnetizationParams::smoothing (pass the solver's).
-    /// localCorrection: as MagnetizationParams::localCorrection (pass the solver's), used by
-    /// inducedFieldAtParticle() only.
-    void build(const std::vector<Vec3>& x, const std::vector<Real>& volume, const std::vector<Vec3>& M,
-               double openingAngle = 0.5, double smoothing = DipoleTree::kDefaultSmoothing,
-               bool localCorrection = MagnetizationParams{}.localCorrection);
-    /// Field of the magnetized particles at p [m] -> [A/m].
-    Vec3d inducedField(const Vec3d& p) const { return tree_.fieldAt(p); }
-    /// Jacobian dH_a/dx_b [A/m^2] of the particle field at p.
-    Mat3d inducedGradient(const Vec3d& p) const { return tree_.gradientAt(p); }
-    /// Exact all-particle sum at p (reference, O(N)).
-    Vec3d inducedFieldExact(const Vec3d& p) const { return tree_.fieldAtDirect(p); }
-    /// The particle field the solver uses at particle i (index into build()'s x): exact sum,
-    /// O(N), including the surface sampling term and the local correction (computed at the
-    /// first call: three field evaluations).
-    Vec3d inducedFieldAtParticle(size_t i) const;
-    size_t size() const { return tree_.size(); }
-    /// Total moment sum V M [A m^2] and volume centroid [m]: the far field is that dipole.
-    Vec3d totalMoment() const { return tree_.totalMoment(); }
-    Vec3d centroid() const { return tree_.centroid(); }
-
-private:
-    mutable DipoleTree tree_;      // mutable: the local correction is computed on first use
-    std::vector<uint32_t> sorted_; // sorted_[i] = tree place of input particle i
-    bool correct_ = true;
-    mutable std::unique_ptr<std::once_flag> corrected_;
-};
-
-/// H [A/m] at p: magnets plus magnetized particles.
-Vec3d totalField(const std::vector<Magnet>& magnets, const ParticleFieldEvaluator& particles, const Vec3d& p);
-/// dH_a/dx_b [A/m^2] at p: magnets plus magnetized particles.
-Mat3d totalFieldGradient(const std::vector<Magnet>& magnets, const ParticleFieldEvaluator& particles,
-                         const Vec3d& p);
 
 } // namespace ferro

@@ -1,6 +1,6 @@
 #include "sim/scene/SimSceneFile.hpp"
 
-#include "sim/magnetics/MagnetScene.hpp"
+#include "sim/magnets/MagnetScene.hpp"
 
 #include <algorithm>
 #include <climits>
@@ -13,7 +13,7 @@ const std::vector<std::string>& shotSceneSections()
     // is refused by whichever stage reads the file first. Each stage parses its own.
     static const std::vector<std::string> sections = {
         "shot", "fluid", "container", "sim",   // ferro-sim: SimSceneFile.cpp
-        "magnets", "magnetization",            // sim/magnetics/MagnetScene.cpp
+        "magnets", "magnetization",            // sim/magnets/MagnetScene.cpp
         "surface",                             // surface/SurfaceParams.cpp
         "spikes",                              // spikes/SpikeParams.cpp
         "render"};                             // povray/RenderParams.cpp

@@ -1,6 +1,6 @@
 #pragma once
 // The shot's description as the scene file gives it: [shot], [fluid], [container], [sim]
-// here and the magnets' sections through sim/magnetics/MagnetScene. Errors are SceneErrors
+// here and the magnets' sections through sim/magnets/MagnetScene. Errors are SceneErrors
 // naming file, line and key (exit 2).
 #include "sim/core/SceneDocument.hpp"
 #include "sim/scene/SimParams.hpp"

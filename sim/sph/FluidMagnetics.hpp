@@ -69,8 +69,8 @@
 // - A scene without magnets constructs nothing and costs nothing; magnets with a
 //   non-magnetic fluid (susceptibility 0) only report the applied field.
 #include "sim/magnetics/DemagnetizationCurve.hpp"
-#include "sim/magnetics/MagnetField.hpp"
-#include "sim/sph/NeighborSearch.hpp"
+#include "sim/magnets/MagnetField.hpp"
+#include "sim/spatial/NeighborSearch.hpp"
 #include "sim/scene/SimParams.hpp"
 
 #include <algorithm>

@@ -1,6 +1,6 @@
 #include "sim/sph/FluidSeed.hpp"
 #include "sim/sph/MagnetObstacles.hpp"
-#include "sim/magnetics/MagnetKinds.hpp"
+#include "sim/magnets/MagnetKinds.hpp"
 
 #include "sim/core/MachineMemory.hpp"
 #include "sim/core/SceneDocument.hpp"

@@ -3,7 +3,7 @@
 // lattice at the spacing (or with an exact count), checked against the container.
 #include "sim/core/Types.hpp"
 #include "sim/scene/SimParams.hpp"
-#include "sim/sph/Container.hpp"
+#include "sim/geometry/Container.hpp"
 
 #include <string>
 #include <vector>

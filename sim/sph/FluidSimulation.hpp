@@ -9,14 +9,14 @@
 // start; ids are stable and all exported data is in id order. A frame is a pure function
 // of the state at its start (no parallel floating-point reductions whose order varies),
 // so runs are repeatable and resume bit-for-bit from a frame file.
-#include "sim/sph/Container.hpp"
+#include "sim/geometry/Container.hpp"
 #include "sim/sph/FluidSeed.hpp"
 #include "sim/sph/Gather4.hpp"
 #include "sim/sph/FluidMagnetics.hpp"
 #include "sim/sph/ImplicitViscosity.hpp"
 #include "sim/sph/Kernel.hpp"
 #include "sim/sph/MagnetObstacles.hpp"
-#include "sim/sph/NeighborSearch.hpp"
+#include "sim/spatial/NeighborSearch.hpp"
 #include "sim/sph/PressureSolver.hpp"
 #include "sim/sph/SanityGuard.hpp"
 #include "sim/scene/SimParams.hpp"

@@ -30,7 +30,7 @@
 // SPlisHSPlasH's viscosityBoundary = 0). The wall reaction is not applied (walls are static).
 #include "sim/core/Types.hpp"
 #include "sim/sph/Kernel.hpp"
-#include "sim/sph/NeighborSearch.hpp"
+#include "sim/spatial/NeighborSearch.hpp"
 
 #include <Eigen/Dense>
 

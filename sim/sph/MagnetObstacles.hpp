@@ -1,6 +1,6 @@
 #pragma once
 // Magnets are solids: the fluid cannot enter them. Each positioned magnet's body is the
-// smallest real body that carries it (magnetBodyRadius, sim/magnetics/MagnetKinds.hpp),
+// smallest real body that carries it (magnetBodyRadius, sim/magnets/MagnetKinds.hpp),
 // the same body within which its field is bounded and flat:
 //   dipole  a sphere of NdFeB around its position;
 //   bar     a capsule of the pole-face radius around the segment between its two poles
@@ -22,7 +22,7 @@
 // The fluid's blocks are seeded around the bodies (FluidSeed.cpp): a magnet placed in the
 // fluid displaces it, and a block's count is the fluid's, the magnet's volume left out.
 #include "sim/core/Types.hpp"
-#include "sim/magnetics/MagnetField.hpp"
+#include "sim/magnets/MagnetField.hpp"
 
 #include <vector>
 

@@ -1,6 +1,7 @@
 #include "spikes/tracker/TipTracker.hpp"
 
 #include "sim/core/ParticleFile.hpp"
+#include "sim/spatial/HashGrid.hpp"
 
 #include <algorithm>
 #include <cmath>
@@ -8,53 +9,10 @@
 #include <sstream>
 #include <cstdint>
 #include <limits>
-#include <unordered_map>
 
 namespace ferro {
 
 namespace {
-
-/// Nearest-vertex queries on a point set, on a uniform hash grid.
-class NearestVertex {
-public:
-    NearestVertex(const std::vector<Vec3>& pts, double cell) : pts_(pts), cell_(cell) {
-        for (uint32_t i = 0; i < pts.size(); ++i) grid_[key(cellOf(pts[i].cast<double>()))].push_back(i);
-    }
-    /// Index of the nearest point to p (searching rings of cells outward).
-    uint32_t nearest(const Vec3d& p) const {
-        const Eigen::Vector3i c = cellOf(p);
-        uint32_t best = 0;
-        double bestD = std::numeric_limits<double>::infinity();
-        for (int ring = 0; ring < 64; ++ring) {
-            for (int dx = -ring; dx <= ring; ++dx)
-                for (int dy = -ring; dy <= ring; ++dy)
-                    for (int dz = -ring; dz <= ring; ++dz) {
-                        if (std::max({std::abs(dx), std::abs(dy), std::abs(dz)}) != ring) continue;
-                        const auto it = grid_.find(key(c + Eigen::Vector3i(dx, dy, dz)));
-                        if (it == grid_.end()) continue;
-                        for (uint32_t i : it->second) {
-                            const double d = (pts_[i].cast<double>() - p).squaredNorm();
-                            if (d < bestD) bestD = d, best = i;
-                        }
-                    }
-            // Every point within ring * cell has been seen once one was found that close.
-            if (bestD <= (ring * cell_) * (ring * cell_)) break;
-        }
-        return best;
-    }
-
-private:
-    Eigen::Vector3i cellOf(const Vec3d& p) const {
-        return Eigen::Vector3i(int(std::floor(p.x() / cell_)), int(std::floor(p.y() / cell_)),
-                               int(std::floor(p.z() / cell_)));
-    }
-    static int64_t key(const Eigen::Vector3i& c) {
-        return (int64_t(c.x() & 0x1fffff) << 42) | (int64_t(c.y() & 0x1fffff) << 21) | int64_t(c.z() & 0x1fffff);
-    }
-    const std::vector<Vec3>& pts_;
-    double cell_;
-    std::unordered_map<int64_t, std::vector<uint32_t>> grid_;
-};
 
 double meanEdge(const TriangleMesh& m) {
     double sum = 0;
@@ -75,7 +33,9 @@ std::vector<SpikeTipSample> findTips(const TriangleMesh& spiky, const TriangleMe
     if (spiky.empty() || surface.empty()) return tips;
     const std::vector<Vec3d> normals = areaWeightedNormals(surface);
     const double edge = meanEdge(surface);
-    const NearestVertex near(surface.vertices, std::max(2 * edge, 1e-9));
+    std::vector<Vec3d> surfacePoints(surface.vertices.size());
+    for (size_t i = 0; i < surfacePoints.size(); ++i) surfacePoints[i] = surface.vertices[i].cast<double>();
+    const HashGrid near(surfacePoints, std::max(2 * edge, 1e-9));
 
     const size_t n = spiky.vertices.size();
     std::vector<double> h(n, 0.0);

@@ -31,7 +31,7 @@
 // targets as |H_tree - (H_ext + exact particle field of the tree's M)| (the tree's
 // approximation error at its own solution, plus its residual), not against a direct solve.
 #include "sim/magnetics/MagnetizationSolver.hpp"
-#include "sim/magnetics/MagnetState.hpp"
+#include "sim/magnets/MagnetState.hpp"
 #include "sim/core/ParticleFile.hpp"
 #include "sim/core/Constants.hpp"
 #include "tests/TestUtil.hpp"

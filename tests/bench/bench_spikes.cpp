@@ -9,7 +9,7 @@
 #include "tests/spikes/SpikeTestMeshes.hpp"
 #include "sim/core/Constants.hpp"
 
-#include "sim/magnetics/MagnetState.hpp"
+#include "sim/magnets/MagnetState.hpp"
 #include "sim/magnetics/MagnetizationSolver.hpp"
 #include "sim/core/ParticleFile.hpp"
 #include "sim/core/SceneDocument.hpp"

@@ -10,8 +10,8 @@
 #include "tests/fuzz/FuzzTarget.hpp"
 
 #include "sim/core/ParticleFile.hpp"
-#include "sim/magnetics/MagnetKinds.hpp"
-#include "sim/magnetics/MagnetState.hpp"
+#include "sim/magnets/MagnetKinds.hpp"
+#include "sim/magnets/MagnetState.hpp"
 
 #include <cmath>
 

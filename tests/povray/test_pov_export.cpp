@@ -5,9 +5,9 @@
 
 #include "povray/PovExport.hpp"
 #include "povray/RenderParams.hpp"
-#include "sim/magnetics/MagnetState.hpp"
+#include "sim/magnets/MagnetState.hpp"
 #include "sim/core/SceneDocument.hpp"
-#include "sim/magnetics/MagnetScene.hpp"
+#include "sim/magnets/MagnetScene.hpp"
 
 #include <catch2/catch.hpp>
 #include <Eigen/Geometry>

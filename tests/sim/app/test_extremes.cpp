@@ -7,8 +7,8 @@
 #include "sim/core/ExitCodes.hpp"
 #include "sim/core/Constants.hpp"
 #include "sim/core/ParticleFile.hpp"
-#include "sim/magnetics/MagnetField.hpp"
-#include "sim/magnetics/MagnetState.hpp"
+#include "sim/magnets/MagnetField.hpp"
+#include "sim/magnets/MagnetState.hpp"
 #include "sim/magnetics/MagnetizationSolver.hpp"
 #include "tests/TestUtil.hpp"
 

@@ -1,4 +1,4 @@
-// Self-consistent magnetization (sim/magnetics/MagnetizationSolver, sim/magnetics/DipoleTree): the Langevin
+// Self-consistent magnetization (sim/magnetics/MagnetizationSolver, sim/particlefield/DipoleTree): the Langevin
 // law, the analytic magnetizable sphere, the solvers against each other, field gradients,
 // far fields and regularization.
 #include "sim/magnetics/MagnetizationSolver.hpp"

@@ -4,7 +4,7 @@
 // field, the re-solve policy, H / M / magnets in the particle files, and resume.
 #include "sim/sph/FluidMagnetics.hpp"
 #include "sim/sph/FluidSimulation.hpp"
-#include "sim/magnetics/MagnetState.hpp"
+#include "sim/magnets/MagnetState.hpp"
 #include "sim/magnetics/MagnetizationSolver.hpp"
 #include "sim/core/ParticleFile.hpp"
 #include "sim/core/SceneDocument.hpp"

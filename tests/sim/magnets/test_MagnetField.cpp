@@ -1,7 +1,7 @@
-// Analytic magnet fields (sim/magnetics/MagnetField): closed forms, Biot-Savart, far-field limits,
+// Analytic magnet fields (sim/magnets/MagnetField): closed forms, Biot-Savart, far-field limits,
 // softening and keyframe interpolation.
-#include "sim/magnetics/MagnetField.hpp"
-#include "sim/magnetics/MagnetKinds.hpp"
+#include "sim/magnets/MagnetField.hpp"
+#include "sim/magnets/MagnetKinds.hpp"
 #include "sim/core/Constants.hpp"
 
 #include <Eigen/Geometry>

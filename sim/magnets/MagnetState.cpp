@@ -1,4 +1,4 @@
-#include "sim/magnetics/MagnetState.hpp"
+#include "sim/magnets/MagnetState.hpp"
 
 #include "sim/core/SceneDocument.hpp"
 

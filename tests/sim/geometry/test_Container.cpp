@@ -1,6 +1,6 @@
 // Containers: wall sampling, contains() and constrain() for box, dish and mesh, and the
 // hard guarantee of the mesh container: no motion crosses its (0.5 mm thin) wall.
-#include "sim/sph/Container.hpp"
+#include "sim/geometry/Container.hpp"
 #include "sim/core/Constants.hpp"
 #include "sim/core/SceneDocument.hpp"
 #include "tests/TestUtil.hpp"

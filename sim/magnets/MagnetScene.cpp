@@ -1,4 +1,4 @@
-#include "sim/magnetics/MagnetScene.hpp"
+#include "sim/magnets/MagnetScene.hpp"
 
 #include <cmath>
 #include <limits>

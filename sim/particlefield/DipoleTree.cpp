@@ -1,4 +1,4 @@
-#include "sim/magnetics/DipoleTree.hpp"
+#include "sim/particlefield/DipoleTree.hpp"
 
 #include "sim/core/Constants.hpp"
 

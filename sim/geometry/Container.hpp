@@ -5,9 +5,10 @@
 // which give the pressure solver a smooth wall, and (2) a hard guarantee: `constrain`
 // never lets a particle's motion cross a wall, however thin, or leave the container's
 // safety box. Boundary particles do the physics; `constrain` is the safety net.
-#include "sim/scene/SimParams.hpp"
+#include "sim/geometry/ContainerParams.hpp"
 
 #include <memory>
+#include <string>
 #include <vector>
 
 namespace ferro {

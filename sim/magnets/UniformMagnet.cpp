@@ -1,8 +1,8 @@
 // Uniform field (kind "uniform"): H = strength * axis [A/m] everywhere, the field between
 // Helmholtz coils; no position, no gradient.
-#include "sim/magnetics/MagnetKinds.hpp"
+#include "sim/magnets/MagnetKinds.hpp"
 
-#include "sim/magnetics/MagnetField.hpp"
+#include "sim/magnets/MagnetField.hpp"
 
 namespace ferro {
 

@@ -1,10 +1,10 @@
 // Point dipole (kind "dipole"): moment m = strength * axis [A m^2] at the magnet's position,
 // Plummer-softened over `softening` so that particles touching the pole stay finite, and
 // bounded within the smallest body that can carry the moment (magnetBodyRadius).
-#include "sim/magnetics/MagnetKinds.hpp"
+#include "sim/magnets/MagnetKinds.hpp"
 
 #include "sim/core/Constants.hpp"
-#include "sim/magnetics/MagnetField.hpp"
+#include "sim/magnets/MagnetField.hpp"
 
 #include <Eigen/Geometry>
 

@@ -1,4 +1,4 @@
-#include "sim/magnetics/LangevinLaw.hpp"
+#include "sim/magnets/LangevinLaw.hpp"
 
 #include <cmath>
 

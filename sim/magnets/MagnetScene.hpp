@@ -4,8 +4,8 @@
 // ferro-pov) reads them through these two functions; errors are SceneErrors naming
 // file, line and key (exit 2).
 #include "sim/core/SceneDocument.hpp"
-#include "sim/magnetics/MagnetField.hpp"
-#include "sim/magnetics/MagnetizationParams.hpp"
+#include "sim/magnets/MagnetField.hpp"
+#include "sim/magnets/MagnetizationParams.hpp"
 
 #include <vector>
 

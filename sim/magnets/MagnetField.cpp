@@ -1,5 +1,5 @@
-#include "sim/magnetics/MagnetField.hpp"
-#include "sim/magnetics/MagnetKinds.hpp"
+#include "sim/magnets/MagnetField.hpp"
+#include "sim/magnets/MagnetKinds.hpp"
 
 #include "sim/core/Constants.hpp"
 

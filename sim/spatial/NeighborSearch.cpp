@@ -1,4 +1,4 @@
-#include "sim/sph/NeighborSearch.hpp"
+#include "sim/spatial/NeighborSearch.hpp"
 
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>

@@ -5,21 +5,21 @@
 // One `comment magnet ...` line per magnet, in scene order, after `comment magnet_count N`:
 //     comment magnet_count 1
 //     comment magnet dipole px py pz dx dy dz strength length radius softening
-// kind is a name of sim/magnetics/MagnetKinds.hpp (dipole, bar, ...); position [m], unit direction, strength in the kind's unit
+// kind is a name of sim/magnets/MagnetKinds.hpp (dipole, bar, ...); position [m], unit direction, strength in the kind's unit
 // (moment A m^2, pole strength A m, field A/m, current A), length, radius, softening [m];
 // numbers are printed with 9 significant digits (float-exact, more than enough for a field).
 // The fluid's magnetic law is carried as `comment susceptibility chi0` and
 // `comment saturation Ms` (A/m, 0 = linear).
-#include "sim/magnetics/MagnetField.hpp"
+#include "sim/magnets/MagnetField.hpp"
 #include "sim/core/ParticleFile.hpp"
-#include "sim/magnetics/MagnetizationParams.hpp"
+#include "sim/magnets/MagnetizationParams.hpp"
 
 #include <string>
 #include <vector>
 
 namespace ferro {
 
-/// The kind's name in the table of sim/magnetics/MagnetKinds.hpp.
+/// The kind's name in the table of sim/magnets/MagnetKinds.hpp.
 const char* magnetKindName(Magnet::Kind kind);
 
 /// Appends magnet_count and one magnet comment per magnet to `table` (and the fluid's

@@ -9,7 +9,7 @@
 // Conventions: H is the field of the magnet alone in vacuum, in SI units (A/m); the
 // flux density is B = mu0 H. No mu0 appears anywhere in this file.
 #include "sim/core/Types.hpp"
-#include "sim/magnetics/MagnetKinds.hpp"
+#include "sim/magnets/MagnetKinds.hpp"
 #include "sim/core/Constants.hpp"
 
 #include <vector>
@@ -18,7 +18,7 @@ namespace ferro {
 
 /// One field source. A plain struct: which members matter depends on `kind`.
 struct Magnet {
-    using Kind = MagnetKind;  ///< see sim/magnetics/MagnetKinds.hpp: one row per kind
+    using Kind = MagnetKind;  ///< see sim/magnets/MagnetKinds.hpp: one row per kind
     Kind kind = Kind::Dipole;
     Vec3d position{0, 0, 0};  ///< centre of the magnet [m] (ignored by Uniform)
     Vec3d direction{0, 0, 1}; ///< magnetic axis (south -> north for Dipole and Bar; right-hand

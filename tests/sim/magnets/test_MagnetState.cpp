@@ -1,7 +1,7 @@
-// The magnets in a particle file's header (sim/magnetics/MagnetState.hpp): every kind
+// The magnets in a particle file's header (sim/magnets/MagnetState.hpp): every kind
 // survives writeMagnetComments -> particle file -> readMagnetComments to the printed 9
 // significant digits, and every malformed header is a one-line ParticleFileError.
-#include "sim/magnetics/MagnetState.hpp"
+#include "sim/magnets/MagnetState.hpp"
 
 #include <catch2/catch.hpp>
 

@@ -1,9 +1,9 @@
 // Bar magnet (kind "bar"): two opposite magnetic pole charges +-q_m = strength [A m],
 // `length` apart along the axis (the Gilbert model; the paper's eqs. 3-4), softened.
-#include "sim/magnetics/MagnetKinds.hpp"
+#include "sim/magnets/MagnetKinds.hpp"
 
 #include "sim/core/Constants.hpp"
-#include "sim/magnetics/MagnetField.hpp"
+#include "sim/magnets/MagnetField.hpp"
 
 #include <Eigen/Geometry>
 

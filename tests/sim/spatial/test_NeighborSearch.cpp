@@ -1,7 +1,7 @@
-// The uniform-grid neighbour search (sim/sph/NeighborSearch.hpp) against a brute-force
+// The uniform-grid neighbour search (sim/spatial/NeighborSearch.hpp) against a brute-force
 // pair search: random points, points exactly on cell faces and on the bounding box, and a
 // spread-out cloud for which the grid must coarsen its cells.
-#include "sim/sph/NeighborSearch.hpp"
+#include "sim/spatial/NeighborSearch.hpp"
 
 #include <catch2/catch.hpp>
 

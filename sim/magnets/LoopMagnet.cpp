@@ -1,10 +1,10 @@
 // Current loop (kind "loop"): current I = strength [A] in a circle of `radius` around the
 // axis, its exact off-axis field from complete elliptic integrals; points closer than
 // `softening` to the wire are evaluated at that distance.
-#include "sim/magnetics/MagnetKinds.hpp"
+#include "sim/magnets/MagnetKinds.hpp"
 
 #include "sim/core/Constants.hpp"
-#include "sim/magnetics/MagnetField.hpp"
+#include "sim/magnets/MagnetField.hpp"
 
 #include <Eigen/Geometry>
 

@@ -1,4 +1,4 @@
-#include "sim/magnetics/MagnetKinds.hpp"
+#include "sim/magnets/MagnetKinds.hpp"
 
 #include "sim/core/Constants.hpp"
 

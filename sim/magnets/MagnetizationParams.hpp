@@ -1,6 +1,6 @@
 #pragma once
 // [magnetization]: the fluid's magnetic law and how its self-consistent field is solved.
-// Filled from the scene file by sim/magnetics/MagnetScene.cpp.
+// Filled from the scene file by sim/magnets/MagnetScene.cpp.
 
 namespace ferro {
 
@@ -20,13 +20,13 @@ struct MagnetizationParams {
     int maxIterations = 50;        ///< self-consistency iterations per solve (direct, tree)
     /// Particle model: each particle's moment V M is spread over a Wendland C2 kernel of
     /// support radius smoothing * V^(1/3) (dimensionless, in particle spacings; see
-    /// sim/magnetics/DipoleTree.hpp). Default 2.5, a little over the SPH support of 2
+    /// sim/particlefield/DipoleTree.hpp). Default 2.5, a little over the SPH support of 2
     /// spacings: measured on balls of ~10 spacings' radius, 2.0 leaves 1.3-1.4x the
     /// per-particle scatter on a jittered set, 3.0-3.5 add 1.5-3 % to the interior field's
     /// error at chi0 = 10 on a settled SPH ball (a wider surface layer). 0 = the older
     /// model: uniformly magnetized spheres of volume V, exact on a cubic lattice only.
     double smoothing = 2.5;
-    /// Local consistency correction of the smoothed model (sim/magnetics/DipoleTree.hpp):
+    /// Local consistency correction of the smoothed model (sim/particlefield/DipoleTree.hpp):
     /// each interior particle's field operator is corrected so that a uniform magnetization
     /// gives a field without particle-scale noise. Costs three field evaluations per solve.
     /// Measured on a ball jittered by 0.2 spacings at chi0 = 10: 11.5 % RMS field error per

@@ -1,0 +1,84 @@
+// The box container: an axis-aligned box, walls sampled on one lattice, constrain() a clamp.
+#include "sim/geometry/ContainerKinds.hpp"
+
+#include <vector>
+
+namespace ferro {
+namespace container_detail {
+namespace {
+
+class BoxContainer final : public Container {
+public:
+    BoxContainer(const Vec3d& lo, const Vec3d& hi, bool closedTop)
+        : lo_(lo), hi_(hi), closedTop_(closedTop) {
+        for (int a = 0; a < 3; ++a) {
+            loF_[a] = inwardLo(lo[a]);
+            hiF_[a] = inwardHi(hi[a]);
+        }
+    }
+
+    std::vector<Vec3> sampleWalls(double spacing, double offset) const override {
+        checkSpacing(spacing);
+        const Vec3d lo = lo_ - Vec3d::Constant(offset);
+        const Vec3d hi = hi_ + Vec3d(offset, offset, closedTop_ ? offset : 0.0);
+        const Vec3d ext = hi - lo;
+        const long nx = intervals(ext.x(), spacing), ny = intervals(ext.y(), spacing),
+                   nz = intervals(ext.z(), spacing);
+        std::vector<Vec3> out;
+        auto put = [&](long i, long j, long k) {
+            out.push_back(toVec3(lo + Vec3d(ext.x() * double(i) / double(nx),
+                                             ext.y() * double(j) / double(ny),
+                                             ext.z() * double(k) / double(nz))));
+        };
+        // One lattice over the whole box surface: every lattice point is visited once, so
+        // shared edges and corners carry no duplicates.
+        for (long k = 0; k <= nz; ++k) {
+            if (k == 0 || (k == nz && closedTop_)) {
+                for (long j = 0; j <= ny; ++j)
+                    for (long i = 0; i <= nx; ++i) put(i, j, k);
+                continue;
+            }
+            for (long i = 0; i <= nx; ++i) {
+                put(i, 0, k);
+                put(i, ny, k);
+            }
+            for (long j = 1; j < ny; ++j) {
+                put(0, j, k);
+                put(nx, j, k);
+            }
+        }
+        return out;
+    }
+
+    bool contains(const Vec3d& p, double margin) const override {
+        for (int a = 0; a < 3; ++a)
+            if (!(p[a] >= lo_[a] + margin && p[a] <= hi_[a] - margin)) return false;
+        return true;
+    }
+
+    bool constrain(const Vec3& xOld, Vec3& x, Vec3& v) const override {
+        if (parkIfNonFinite(xOld, x, v)) return true;
+        bool corrected = false;
+        for (int a = 0; a < 3; ++a) corrected |= clampAxis(x[a], v[a], loF_[a], hiF_[a]);
+        return corrected;
+    }
+
+    void bounds(Vec3d& lo, Vec3d& hi) const override {
+        lo = lo_;
+        hi = hi_;
+    }
+
+private:
+    Vec3d lo_, hi_;
+    bool closedTop_;
+    float loF_[3], hiF_[3];
+};
+
+} // namespace
+
+std::unique_ptr<Container> makeBoxContainer(const Vec3d& lo, const Vec3d& hi, bool closedTop) {
+    return std::make_unique<BoxContainer>(lo, hi, closedTop);
+}
+
+} // namespace container_detail
+} // namespace ferro
