@@ -39,6 +39,12 @@ struct FluidParams {
     enum class ViscosityMethod { Explicit, Implicit, Auto };
     ViscosityMethod viscosityMethod = ViscosityMethod::Auto;
     double surfaceTension = 0.0;  ///< sigma [N/m]; 0 disables surface tension
+    /// The pair-force models by their registered names (sim/sph/forces/PairForces.cpp). The
+    /// parser takes any name; the simulation checks it against the table and blames the key.
+    std::string viscosityModel = "standard";
+    std::string viscosityModelWhere;      ///< "file:line" of fluid.viscosity_model, for that message
+    std::string surfaceTensionModel = "akinci2013";
+    std::string surfaceTensionModelWhere; ///< "file:line" of fluid.surface_tension_model
     double spacing = 0.0;         ///< particle spacing [m]; 0 = derived from a block's count
     std::vector<FluidBlock> blocks;
 };

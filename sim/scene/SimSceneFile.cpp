@@ -85,6 +85,10 @@ FluidParams parseFluid(const SceneDocument& doc)
                         : method == "implicit" ? FluidParams::ViscosityMethod::Implicit
                                                : FluidParams::ViscosityMethod::Auto;
     p.surfaceTension = r.nonNegative("surface_tension", p.surfaceTension);
+    p.viscosityModel = r.string("viscosity_model", p.viscosityModel);
+    p.viscosityModelWhere = r.where("viscosity_model");
+    p.surfaceTensionModel = r.string("surface_tension_model", p.surfaceTensionModel);
+    p.surfaceTensionModelWhere = r.where("surface_tension_model");
     p.spacing = r.nonNegative("spacing", p.spacing);
     for (const TableReader& block : r.tables("block"))
         p.blocks.push_back(parseBlock(block));

@@ -1,4 +1,5 @@
 #include "sim/sph/FluidSimulation.hpp"
+#include "sim/sph/forces/ForceSweep.hpp"
 
 #include "sim/core/Constants.hpp"
 #include "sim/core/ParticleLoops.hpp"
@@ -24,16 +25,6 @@ namespace {
 
 constexpr size_t kGrain = 256;
 
-/// Weight of Akinci's cohesion term against the curvature term. Akinci's cohesion is
-/// gamma m_j C(r), which is not dimensionally consistent with the curvature term; with
-/// V_j C(r) (dimensionless) in its place, 1000 restores the balance Akinci and
-/// SPlisHSPlasH tuned for water in SI units.
-constexpr Real kCohesionWeight = 1000;
-
-} // namespace
-
-namespace {
-
 
 void splitCoordinates(const std::vector<Vec3>& x, std::vector<Real>& px, std::vector<Real>& py,
                       std::vector<Real>& pz) {
@@ -55,7 +46,6 @@ FluidSimulation::FluidSimulation(const SimScene& scene)
     spacing_ = seed.spacing;
     h_ = 2 * spacing_;
     kernel_ = CubicSplineKernel(Real(h_));
-    cohesion_ = CohesionKernel(Real(h_));
     rho0_ = scene_.fluid.restDensity;
 
     // Particle volume: the inverse kernel sum of a full cubic lattice, so that a particle
@@ -80,7 +70,7 @@ FluidSimulation::FluidSimulation(const SimScene& scene)
     createPressureSolver();
     sampleBoundary();
     chooseSpeedScales();
-    setUpSurfaceTension();
+    setUpPairForces();
     chooseViscosityMethod();
 
     if (!scene_.magnets.empty()) magnetics_ = std::make_unique<FluidMagnetics>(scene_, volume_, spacing_);
@@ -179,9 +169,7 @@ void FluidSimulation::chooseSpeedScales() {
     expectedSpeed_ = vExpected;
 }
 
-double FluidSimulation::explicitViscousTimeStep() const {
-    return viscosity_ > 0 ? kExplicitViscousStep * h_ * h_ / viscosity_ : 1e30;
-}
+double FluidSimulation::explicitViscousTimeStep() const { return pairForces_->viscousStepLimit(); }
 
 void FluidSimulation::chooseViscosityMethod() {
     // Decided once, from the scene alone (the initial fill's speed scale), so that a resumed
@@ -191,14 +179,19 @@ void FluidSimulation::chooseViscosityMethod() {
     bool implicit = scene_.fluid.viscosityMethod == Method::Implicit;
     if (scene_.fluid.viscosityMethod == Method::Auto) {
         const double otherStep =
-            std::min({scene_.solver.maxDt, solver_->maxTimeStep(expectedSpeed_), capillaryDt_});
-        implicit = explicitViscousTimeStep() < otherStep;
+            std::min({scene_.solver.maxDt, solver_->maxTimeStep(expectedSpeed_), pairForces_->tensionStepLimit()});
+        // The implicit solve inverts the standard operator only: other models stay explicit.
+        implicit = explicitViscousTimeStep() < otherStep && pairForces_->viscosityHasImplicitSolve();
     }
+    if (implicit && !pairForces_->viscosityHasImplicitSolve())
+        throw SceneError(scene_.path + ": fluid.viscosity_method: \"implicit\" solves the \"standard\" viscosity model only (fluid.viscosity_model is \"" +
+                         scene_.fluid.viscosityModel + "\")");
     if (implicit && viscosity_ > 0) {
         ImplicitViscositySettings settings;
         settings.tolerance = scene_.solver.viscosityTolerance;
         settings.maxIterations = scene_.solver.viscosityMaxIterations;
         implicitViscosity_ = std::make_unique<ImplicitViscosity>(settings);
+        pairForces_->setViscosityInSweep(false);
     }
 }
 
@@ -238,19 +231,15 @@ void FluidSimulation::stopMotionIntoMagnetBodies(double dt) {
     });
 }
 
-void FluidSimulation::setUpSurfaceTension() {
-    // Surface tension (Akinci 2013): the coefficient gamma [m/s^2] of its cohesion and
-    // curvature terms scales as sigma / (rho0 s^2). Akinci's model has no physical
-    // coefficient; kSurfaceTensionCalibration is measured on a free droplet (radius 11
-    // spacings, zero gravity) so that its interior pressure grows with sigma as the Laplace
-    // pressure 2 sigma / R. Only there: at other radii the slope stays ~175 /m instead of
-    // 2 / R, and a droplet oscillates ~4x slower than Rayleigh's period (both measured by the
-    // hidden [known-failure] cases of tests/sim/sph/test_SurfaceTension.cpp).
-    constexpr double kSurfaceTensionCalibration = 0.0029;
-    gamma_ = kSurfaceTensionCalibration * scene_.fluid.surfaceTension / (rho0_ * spacing_ * spacing_);
-    // Capillary wave time step limit (Brackbill et al. 1992).
-    if (scene_.fluid.surfaceTension > 0)
-        capillaryDt_ = std::sqrt(rho0_ * spacing_ * spacing_ * spacing_ / (2 * kPi * scene_.fluid.surfaceTension));
+void FluidSimulation::setUpPairForces() {
+    PairForceSetup setup;
+    setup.scene = &scene_;
+    setup.spacing = spacing_;
+    setup.support = h_;
+    setup.restDensity = rho0_;
+    setup.volume = volume_;
+    setup.viscosity = viscosity_;
+    pairForces_ = makePairForces(setup);
 }
 
 FluidSimulation::~FluidSimulation() = default;
@@ -468,7 +457,7 @@ double FluidSimulation::chooseTimeStep(double dtLimit, double speed, double* sta
     const SolverParams& sp = scene_.solver;
     double dt = sp.maxDt;
     dt = std::min(dt, solver_->maxTimeStep(speed));
-    dt = std::min(dt, capillaryDt_);
+    dt = std::min(dt, pairForces_->tensionStepLimit());
     if (amax > 0) dt = std::min(dt, 0.25 * std::sqrt(0.5 * h_ / amax));
     if (!implicitViscosity_) dt = std::min(dt, explicitViscousTimeStep());
     if (dt < sp.minDt) {
@@ -483,44 +472,6 @@ double FluidSimulation::chooseTimeStep(double dtLimit, double speed, double* sta
     if (dt >= dtLimit) return dtLimit;
     if (2 * dt > dtLimit) return 0.5 * dtLimit;
     return dt;
-}
-
-void FluidSimulation::computeSurfaceNormals() {
-    const size_t n = x_.size();
-    const Real V = Real(volume_);
-    const Real rho0 = Real(rho0_);
-    // Akinci 2013 surface normals n_i = h sum_j (m / rho_j) grad W_ij.
-    normal_.resize(n);
-#if defined(__SSE2__)
-    const CubicSplineKernel4 kernel4(kernel_);
-#endif
-    forEachParticle(n, [&](size_t i) {
-        Vec3 sum = Vec3::Zero();
-        uint32_t k = fluidNbr_.begin(i);
-        const uint32_t end = fluidNbr_.end(i);
-#if defined(__SSE2__)
-        {
-            const __m128 rho04 = _mm_set1_ps(rho0);
-            __m128 sx = _mm_setzero_ps(), sy = _mm_setzero_ps(), sz = _mm_setzero_ps();
-            for (; k + 4 <= end; k += 4) {
-                const uint32_t* j = &fluidNbr_.index[k];
-                const PairOffsets4 d(x_[i], px_.data(), py_.data(), pz_.data(), j);
-                const __m128 f =
-                    _mm_mul_ps(_mm_div_ps(rho04, gather4(rho_.data(), j)), kernel4.gradFactor(_mm_sqrt_ps(d.r2)));
-                sx = _mm_add_ps(sx, _mm_mul_ps(f, d.dx));
-                sy = _mm_add_ps(sy, _mm_mul_ps(f, d.dy));
-                sz = _mm_add_ps(sz, _mm_mul_ps(f, d.dz));
-            }
-            sum = Vec3(horizontalSum(sx), horizontalSum(sy), horizontalSum(sz));
-        }
-#endif
-        for (; k < end; ++k) {
-            const uint32_t j = fluidNbr_.index[k];
-            const Vec3 xij = x_[i] - x_[j];
-            sum += (rho0 / rho_[j]) * kernel_.gradW(xij, xij.norm());
-        }
-        normal_[i] = Real(h_) * V * sum;
-    });
 }
 
 void FluidSimulation::updateMagnetics(bool forceSolve) {
@@ -590,125 +541,9 @@ void FluidSimulation::computeSurfaceView() {
 }
 
 void FluidSimulation::computeAccelerations(const Real* pOverRho2) {
-    // One sweep a step, for every solver: the kernel is evaluated here (four pairs at a
-    // time), which is cheaper than loading the gradients DFSPH stores for its iterations.
-    const size_t n = x_.size();
-    const Vec3 g = scene_.solver.gravity.cast<Real>();
-    const Real V = Real(volume_);
-    const Real rho0 = Real(rho0_);
-    const Real m = Real(mass_);
-    // With implicit viscosity the solve after this sweep adds it (applyImplicitViscosity).
-    const bool explicitViscosity = !implicitViscosity_;
-    const Real nu = explicitViscosity ? Real(viscosity_) : 0;
-    const Real nuWall = explicitViscosity ? Real(scene_.fluid.viscosity * scene_.container.wallFriction) : 0;
-    const Real eps2 = Real(0.01 * h_ * h_);
-    const bool tension = gamma_ > 0;
-    const bool pressure = pOverRho2 != nullptr;
-    if (tension) computeSurfaceNormals();
-    const Real gamma = Real(gamma_);
-#if defined(__SSE2__)
-    const CubicSplineKernel4 kernel4(kernel_);
-    const CohesionKernel4 cohesion4(cohesion_);
-#endif
-    forEachParticle(n, [&](size_t i) {
-        Vec3 acc = g;
-        const Vec3 xi = x_[i], vi = v_[i];
-        const Real rhoi = rho_[i];
-        const Real pi = pressure ? pOverRho2[i] : 0;
-        // Pressure and viscosity both act along grad W_ij, with one scalar per pair:
-        // the WCSPH pressure -m (p_i / rho_i^2 + p_j / rho_j^2), symmetric in i and j, and
-        // the viscosity of Monaghan / SPlisHSPlasH, 10 nu V_ij (v_ij . x_ij) / (r^2 + eps^2)
-        // with the pair volume V_ij = m / rho_ij at the mean density, symmetric too, so the
-        // pair forces cancel (up to rounding: i may take a pair in the four-lane loop and j
-        // in the scalar tail) and momentum is conserved.
-        const Real viscosityScale = 10 * nu * 2 * V * rho0;
-        uint32_t k = fluidNbr_.begin(i);
-        const uint32_t end = fluidNbr_.end(i);
-#if defined(__SSE2__)
-        {
-            // Four pairs at a time.
-            const __m128 vx4 = _mm_set1_ps(vi.x()), vy4 = _mm_set1_ps(vi.y()), vz4 = _mm_set1_ps(vi.z());
-            const __m128 rhoi4 = _mm_set1_ps(rhoi), pm4 = _mm_set1_ps(pi), m4 = _mm_set1_ps(m);
-            const __m128 visc4 = _mm_set1_ps(viscosityScale), eps4 = _mm_set1_ps(eps2);
-            __m128 ax = _mm_setzero_ps(), ay = _mm_setzero_ps(), az = _mm_setzero_ps();
-            __m128 tx = _mm_setzero_ps(), ty = _mm_setzero_ps(), tz = _mm_setzero_ps(), gKsum = _mm_setzero_ps();
-            const __m128 gammaK4 = _mm_set1_ps(gamma * 2 * rho0), rMin4 = _mm_set1_ps(Real(1e-9) * Real(h_));
-            const __m128 cohesionScale4 = _mm_set1_ps(kCohesionWeight * V);
-            for (; k + 4 <= end; k += 4) {
-                const uint32_t* j = &fluidNbr_.index[k];
-                const PairOffsets4 d(xi, px_.data(), py_.data(), pz_.data(), j);
-                const __m128 &dx = d.dx, &dy = d.dy, &dz = d.dz, &r2 = d.r2;
-                const __m128 r = _mm_sqrt_ps(r2);
-                const __m128 sc = kernel4.gradFactor(r);
-                // rho_i + rho_j, used by viscosity and tension alike.
-                const __m128 rhoSum = _mm_add_ps(rhoi4, gather4(rho_.data(), j));
-                __m128 c = _mm_setzero_ps();
-                if (pressure) {
-                    c = _mm_sub_ps(c, _mm_mul_ps(m4, _mm_add_ps(pm4, gather4(pOverRho2, j))));
-                }
-                if (nu > 0) {
-                    const __m128 dvx = _mm_sub_ps(vx4, gather4(v_.data(), j, 0));
-                    const __m128 dvy = _mm_sub_ps(vy4, gather4(v_.data(), j, 1));
-                    const __m128 dvz = _mm_sub_ps(vz4, gather4(v_.data(), j, 2));
-                    const __m128 dvdx =
-                        _mm_add_ps(_mm_add_ps(_mm_mul_ps(dvx, dx), _mm_mul_ps(dvy, dy)), _mm_mul_ps(dvz, dz));
-                    const __m128 den = _mm_mul_ps(rhoSum, _mm_add_ps(r2, eps4));
-                    c = _mm_add_ps(c, _mm_div_ps(_mm_mul_ps(visc4, dvdx), den));
-                }
-                __m128 cs = _mm_mul_ps(c, sc);
-                if (tension) {
-                    // Surface tension (see the scalar loop below): gamma K_ij (-(n_i - n_j)
-                    // - w C(r) / r x_ij); the cohesion part joins the pair scalar.
-                    const __m128 gK = _mm_div_ps(gammaK4, rhoSum);
-                    const __m128 coh = _mm_and_ps(_mm_cmpgt_ps(r, rMin4),
-                                                  _mm_div_ps(_mm_mul_ps(cohesionScale4, cohesion4.C(r)), r));
-                    cs = _mm_sub_ps(cs, _mm_mul_ps(gK, coh));
-                    tx = _mm_add_ps(tx, _mm_mul_ps(gK, gather4(normal_.data(), j, 0)));
-                    ty = _mm_add_ps(ty, _mm_mul_ps(gK, gather4(normal_.data(), j, 1)));
-                    tz = _mm_add_ps(tz, _mm_mul_ps(gK, gather4(normal_.data(), j, 2)));
-                    gKsum = _mm_add_ps(gKsum, gK);
-                }
-                ax = _mm_add_ps(ax, _mm_mul_ps(cs, dx));
-                ay = _mm_add_ps(ay, _mm_mul_ps(cs, dy));
-                az = _mm_add_ps(az, _mm_mul_ps(cs, dz));
-            }
-            // sum gK (n_j - n_i) = sum gK n_j - n_i sum gK
-            if (tension)
-                acc += Vec3(horizontalSum(tx), horizontalSum(ty), horizontalSum(tz)) - horizontalSum(gKsum) * normal_[i];
-            acc += Vec3(horizontalSum(ax), horizontalSum(ay), horizontalSum(az));
-        }
-#endif
-        for (; k < end; ++k) {
-            const uint32_t j = fluidNbr_.index[k];
-            const Vec3 xij = xi - x_[j];
-            const Real r2 = xij.squaredNorm();
-            Real c = 0;
-            if (pressure) c -= m * (pi + pOverRho2[j]);
-            if (nu > 0) c += viscosityScale * (vi - v_[j]).dot(xij) / ((rhoi + rho_[j]) * (r2 + eps2));
-            acc += (c * kernel_.gradWFactor(std::sqrt(r2))) * xij;
-            if (tension) {
-                // Cohesion pulls neighbours to about one spacing, curvature flattens the
-                // surface; K_ij boosts the force where a particle lacks neighbours.
-                const Real r = std::sqrt(r2);
-                const Real Kij = 2 * rho0 / (rhoi + rho_[j]);
-                Vec3 f = -(normal_[i] - normal_[j]);
-                if (r > Real(1e-9) * Real(h_)) f -= (kCohesionWeight * V * cohesion_.C(r) / r) * xij;
-                acc += gamma * Kij * f;
-            }
-        }
-        if (nuWall > 0 || (pressure && pi != 0)) {
-            for (uint32_t k = boundaryNbr_.begin(i); k < boundaryNbr_.end(i); ++k) {
-                const uint32_t b = boundaryNbr_.index[k];
-                const Vec3 xib = xi - bx_[b];
-                const Real r2 = xib.squaredNorm();
-                const Vec3 grad = kernel_.gradW(xib, std::sqrt(r2));
-                // Walls push with the fluid particle's own pressure (Akinci 2012).
-                if (pressure) acc -= (kWallMirror * rho0 * bVolume_[b] * pi) * grad;
-                if (nuWall > 0) acc += (10 * nuWall * bVolume_[b] * rho0 / rho_[i] * vi.dot(xib) / (r2 + eps2)) * grad;
-            }
-        }
-        a_[i] = acc;
-    });
+    const PairForceView view{x_, v_, rho_, px_.data(), py_.data(), pz_.data(), fluidNbr_, boundaryNbr_, bx_, bVolume_, kernel_};
+    const SweepConstants k{scene_.solver.gravity.cast<Real>(), Real(mass_), Real(rho0_), kWallMirror};
+    pairForces_->accelerations(view, k, pOverRho2, a_);
     if (magnetics_) magnetics_->addKelvinAcceleration(a_);
 }
 

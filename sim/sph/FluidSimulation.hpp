@@ -11,8 +11,8 @@
 // so runs are repeatable and resume bit-for-bit from a frame file.
 #include "sim/geometry/Container.hpp"
 #include "sim/sph/FluidSeed.hpp"
-#include "sim/sph/Gather4.hpp"
 #include "sim/sph/FluidMagnetics.hpp"
+#include "sim/sph/forces/PairForces.hpp"
 #include "sim/sph/ImplicitViscosity.hpp"
 #include "sim/sph/Kernel.hpp"
 #include "sim/sph/MagnetObstacles.hpp"
@@ -90,16 +90,10 @@ public:
     double viscosity() const { return viscosity_; }
     /// true: viscosity is solved implicitly (fluid.viscosity_method, "auto" resolved).
     bool implicitViscosity() const { return implicitViscosity_ != nullptr; }
-    /// The explicit update's viscous step limit kExplicitViscousStep h^2 / nu [s] (1e30
-    /// without viscosity); it bounds the step only when viscosity is explicit.
+    /// The viscosity model's explicit step limit [s] (1e30 without viscosity; standard:
+    /// StandardViscosity::kExplicitStep h^2 / nu); it bounds the step only when viscosity is
+    /// explicit.
     double explicitViscousTimeStep() const;
-    /// Stable explicit viscous step as a fraction of h^2 / nu (h the support radius). Power
-    /// iteration on the viscous operator of the resting tank of examples/hydrostatic.toml
-    /// (free surface, walls; tests/sim/sph/test_Viscosity.cpp) gives its fastest rate as
-    /// lambda_max = 58 nu / h^2, so forward Euler is stable for dt < 2 / lambda_max =
-    /// 0.0345 h^2 / nu. The former 0.125 lay 3.6 times beyond it (issue 15: 9.9 m/s in two
-    /// frames at nu = 1e-2). 0.02 keeps a margin of 1.7 for disordered fluid.
-    static constexpr double kExplicitViscousStep = 0.02;
     /// The pressure solver's label ("DFSPH", "WCSPH"), for progress lines and benchmarks.
     const char* pressureSolverLabel() const { return solverEntry_->label; }
     /// The sanity guard's speed bound as of the last step (sim/sph/SanityGuard.hpp).
@@ -199,11 +193,11 @@ public:
 private:
     // Construction, in order: the solver (it decides the neighbour search), the walls'
     // boundary particles, the speed scales (WCSPH's speed of sound, artificial viscosity),
-    // the surface tension coefficient and its time step limit.
+    // the pair-force models (viscosity, surface tension) and how viscosity is applied.
     void createPressureSolver();
     void sampleBoundary();
     void chooseSpeedScales();
-    void setUpSurfaceTension();
+    void setUpPairForces();
     /// fluid.viscosity_method: "auto" takes the implicit solve when the explicit viscous
     /// limit would be shorter than the step the scene takes otherwise.
     void chooseViscosityMethod();
@@ -214,7 +208,6 @@ private:
     void searchCandidates();
     void updateNeighbors();
     /// Akinci 2013 surface normals n_i = h V sum_j (rho0 / rho_j) grad W_ij, for tension.
-    void computeSurfaceNormals();
     /// The colour gradient the magnetic surface force needs (when it does), then the
     /// magnetic update of the step.
     void updateMagnetics(bool forceSolve);
@@ -238,12 +231,12 @@ private:
     std::unique_ptr<PressureSolver> solver_;
     bool frameStart_ = true;                     // the next step starts a frame: re-solve M
     CubicSplineKernel kernel_;
-    CohesionKernel cohesion_;
     double spacing_ = 0, h_ = 0, mass_ = 0, volume_ = 0, rho0_ = 0;
-    double soundSpeed_ = 0, gamma_ = 0, capillaryDt_ = 1e30;
+    double soundSpeed_ = 0;
     double viscosity_ = 0;   // physical plus artificial kinematic viscosity [m^2/s]
     double expectedSpeed_ = 0; // the flow speed scale U of chooseSpeedScales [m/s]
     std::unique_ptr<ImplicitViscosity> implicitViscosity_; // only with implicit viscosity
+    std::unique_ptr<PairForces> pairForces_;     // the force sweep's viscosity and tension models
     double time_ = 0;
     size_t steps_ = 0;
     StepStats stats_;
@@ -257,7 +250,6 @@ private:
     // Fluid particles, sorted by (cell, id).
     std::vector<Vec3> x_, v_, a_, xOld_;
     std::vector<Real> rho_, p_;
-    std::vector<Vec3> normal_;
     std::vector<Vec3> colorGradient_;         // grad c (fluid and walls), for the magnetics, on demand
     std::vector<Real> exposure_;              // exposure of the surface (1 = open), with colorGradient_
     std::vector<uint32_t> id_;

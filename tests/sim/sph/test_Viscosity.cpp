@@ -3,6 +3,7 @@
 // from water's to 1 m^2/s with both pressure solvers.
 #include "sim/sph/FluidSimulation.hpp"
 #include "sim/sph/ImplicitViscosity.hpp"
+#include "sim/sph/forces/StandardViscosity.hpp"
 #include "sim/core/SceneDocument.hpp"
 #include "sim/scene/SimSceneFile.hpp"
 
@@ -236,7 +237,7 @@ TEST_CASE("the explicit viscous step limit lies below 2 / lambda_max of the visc
                       lambda * h * h / nu, stableCoefficient);
         WARN(line);
         CHECK(0.125 > stableCoefficient);   // the former limit was not stable
-        REQUIRE(FluidSimulation::kExplicitViscousStep < 0.8 * stableCoefficient);
+        REQUIRE(StandardViscosity::kExplicitStep < 0.8 * stableCoefficient);
     }
 }
 
