@@ -58,12 +58,12 @@ void forceSweep(const PairForceView& s, const SweepConstants& k, const Viscosity
                 p.r2 = d.r2;
                 p.r = _mm_sqrt_ps(d.r2);
                 p.rhoSum = _mm_add_ps(rhoi4, gather4(s.rho.data(), p.j));
-                const __m128 sc = kernel4.gradFactor(p.r);
+                p.gradFactor = kernel4.gradFactor(p.r);
                 __m128 c = _mm_setzero_ps();
                 if constexpr (kPressure) c = _mm_sub_ps(c, _mm_mul_ps(m4, _mm_add_ps(pm4, gather4(pOverRho2, p.j))));
                 c = visc.radial4(c, viscLanes, p);
                 c = ten.radial4(c, tenLanes, p);
-                __m128 cs = _mm_mul_ps(c, sc);
+                __m128 cs = _mm_mul_ps(c, p.gradFactor);
                 cs = visc.offset4(cs, viscLanes, p);
                 cs = ten.offset4(cs, tenLanes, p);
                 ax = _mm_add_ps(ax, _mm_mul_ps(cs, p.dx));
@@ -83,11 +83,12 @@ void forceSweep(const PairForceView& s, const SweepConstants& k, const Viscosity
             p.r2 = p.xij.squaredNorm();
             p.r = std::sqrt(p.r2);
             p.rhoSum = rhoi + s.rho[p.j];
+            p.gradFactor = s.kernel.gradWFactor(p.r);
             Real c = 0;
             if constexpr (kPressure) c -= m * (pi + pOverRho2[p.j]);
             c = visc.radial1(c, p);
             c = ten.radial1(c, p);
-            acc += (c * s.kernel.gradWFactor(p.r)) * p.xij;
+            acc += (c * p.gradFactor) * p.xij;
             acc = visc.direct1(acc, p);
             acc = ten.direct1(acc, p);
         }

@@ -54,10 +54,11 @@ struct PairForceView {
 };
 
 #if defined(__SSE2__)
-/// Four pairs (i, j[0..3]): offsets x_i - x_j, squared and plain distances, rho_i + rho_j.
+/// Four pairs (i, j[0..3]): offsets x_i - x_j, squared and plain distances, rho_i + rho_j,
+/// and the kernel's gradient factor (grad W_ij = gradFactor x_ij).
 struct PairLanes4 {
     const uint32_t* j;
-    __m128 dx, dy, dz, r2, r, rhoSum;
+    __m128 dx, dy, dz, r2, r, rhoSum, gradFactor;
 };
 #endif
 
@@ -68,6 +69,7 @@ struct Pair1 {
     Vec3 xij;   ///< x_i - x_j
     Real r2, r; ///< |x_ij|^2, |x_ij|
     Real rhoSum;///< rho_i + rho_j
+    Real gradFactor; ///< grad W_ij = gradFactor x_ij
 };
 
 /// A particle and a wall particle b.
