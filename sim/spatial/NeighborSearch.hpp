@@ -18,6 +18,19 @@
 
 namespace ferro {
 
+/// Coordinates of x split into three arrays (the search's and the four-lane loops' layout).
+inline void splitCoordinates(const std::vector<Vec3>& x, std::vector<Real>& px, std::vector<Real>& py,
+                      std::vector<Real>& pz) {
+    px.resize(x.size());
+    py.resize(x.size());
+    pz.resize(x.size());
+    for (size_t i = 0; i < x.size(); ++i) {
+        px[i] = x[i].x();
+        py[i] = x[i].y();
+        pz[i] = x[i].z();
+    }
+}
+
 /// Dense grid of cells, one search radius wide, over an axis-aligned box. (Cells of half
 /// a radius with a 5 x 5 row stencil cut to the sphere test fewer candidates, but were
 /// slower here: a cell then holds one particle, and the per-row overhead wins.)

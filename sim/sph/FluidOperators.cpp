@@ -1,0 +1,136 @@
+// FluidSimulation's SPH operators: the force sweep (sim/sph/forces), the pressure
+// accelerations the pressure solvers share, the free-surface view and the magnetics update.
+#include "sim/sph/FluidSimulation.hpp"
+#include "sim/sph/forces/ForceSweep.hpp"
+
+#include "sim/core/Constants.hpp"
+#include "sim/core/ParticleLoops.hpp"
+#include "sim/core/SceneDocument.hpp"
+#include "sim/magnetics/MagnetizationSolver.hpp"
+
+#include <tbb/blocked_range.h>
+#include <tbb/parallel_for.h>
+#include <tbb/parallel_reduce.h>
+
+#include <algorithm>
+#include <atomic>
+#include <cmath>
+#include <sstream>
+
+#if defined(__SSE2__)
+#include <emmintrin.h>
+#endif
+
+namespace ferro {
+
+void FluidSimulation::updateMagnetics(bool forceSolve) {
+    // The free surface, computed only when the magnetics ask for it (after a self-consistent
+    // solve with curve_fit = "free_surface", and every step for the surface model):
+    // FluidMagnetics::SurfaceView.
+    const FluidMagnetics::SurfaceProbe surface = [this]() {
+        computeSurfaceView();
+        return FluidMagnetics::SurfaceView{&colorGradient_, &exposure_};
+    };
+    magnetics_->update(time_, x_, surface, forceSolve);
+}
+
+void FluidSimulation::computeSurfaceView() {
+    {
+        // The colour gradient grad c_i = V sum_j grad W_ij + sum_b V_b grad W_ib: fluid and
+        // walls, so a wetted wall is no surface (FluidMagnetics.hpp).
+        // Tried and dropped: the fluid's gradient alone with its part away from a wall
+        // removed (the same 18 mm/s at the rim of a pool over a magnet, and faster outliers).
+        const size_t n = x_.size();
+        const Real V = Real(volume_);
+        colorGradient_.resize(n);
+        forEachParticle(n, [&](size_t i) {
+            Vec3 fluid = Vec3::Zero(), wall = Vec3::Zero();
+            for (uint32_t k = fluidNbr_.begin(i); k < fluidNbr_.end(i); ++k) {
+                const Vec3 xij = x_[i] - x_[fluidNbr_.index[k]];
+                fluid += kernel_.gradW(xij, xij.norm());
+            }
+            fluid *= V;
+            for (uint32_t k = boundaryNbr_.begin(i); k < boundaryNbr_.end(i); ++k) {
+                const uint32_t b = boundaryNbr_.index[k];
+                const Vec3 xib = x_[i] - bx_[b];
+                wall += bVolume_[b] * kernel_.gradW(xib, xib.norm());
+            }
+            colorGradient_[i] = fluid + wall;
+        });
+    }
+    {
+        // Exposure: 1 when no fluid particle stands in the cone of half-angle ~40 degrees
+        // along the outward direction -grad c within 1.5 spacings, falling smoothly to 0
+        // as one enters it (the scan-region test of Marrone et al. 2010). In a moving,
+        // disordered fluid |grad c| alone reaches 40 % of a flat surface's value deep inside.
+        const size_t n = x_.size();
+        exposure_.resize(n);
+        const Real s = Real(spacing_);
+        forEachParticle(n, [&](size_t i) {
+            const Vec3 g = colorGradient_[i];
+            const Real gn = g.norm();
+            if (!(gn > 0)) {
+                exposure_[i] = 0;
+                return;
+            }
+            const Vec3 out = -g / gn;
+            Real covered = 0;
+            for (uint32_t k = fluidNbr_.begin(i); k < fluidNbr_.end(i); ++k) {
+                const Vec3 d = x_[fluidNbr_.index[k]] - x_[i];
+                const Real r = d.norm();
+                if (!(r > 0) || r > 2 * s) continue;
+                const Real cosine = d.dot(out) / r;
+                const Real inCone = std::clamp((cosine - Real(0.65)) / Real(0.2), Real(0), Real(1));
+                const Real near = std::clamp((2 * s - r) / (Real(0.5) * s), Real(0), Real(1));
+                covered = std::max(covered, inCone * near);
+            }
+            exposure_[i] = 1 - covered;
+        });
+    }
+}
+
+void FluidSimulation::computeAccelerations(const Real* pOverRho2) {
+    const PairForceView view{x_, v_, rho_, px_.data(), py_.data(), pz_.data(), fluidNbr_, boundaryNbr_, bx_, bVolume_, kernel_};
+    const SweepConstants k{scene_.solver.gravity.cast<Real>(), Real(mass_), Real(rho0_), kWallMirror};
+    pairForces_->accelerations(view, k, pOverRho2, a_);
+    if (magnetics_) magnetics_->addKelvinAcceleration(a_);
+}
+
+void FluidSimulation::pressureAccelerations(const std::vector<Real>& kappa) {
+    // a_i = -sum_j V (kappa_i + kappa_j) grad W_ij - sum_b V_b kWallMirror kappa_i grad W_ib, where
+    // kappa = p / rho^2 in units normalized by rho0 (Bender & Koschier 2017).
+    const Real V = Real(volume_);
+    forEachParticle(x_.size(), [&](size_t i) {
+        const Real ki = kappa[i];
+        const Vec3 xi = x_[i];
+        Vec3 acc = Vec3::Zero();
+        uint32_t k = fluidNbr_.begin(i);
+        const uint32_t end = fluidNbr_.end(i);
+#if defined(__SSE2__)
+        const __m128 ki4 = _mm_set1_ps(ki), V4 = _mm_set1_ps(V);
+        __m128 ax = _mm_setzero_ps(), ay = _mm_setzero_ps(), az = _mm_setzero_ps();
+        for (; k + 4 <= end; k += 4) {
+            const uint32_t* c = fluidNbr_.index.data() + k;
+            const Offsets4 d(xi, px_.data(), py_.data(), pz_.data(), c);
+            const __m128 s = _mm_mul_ps(_mm_mul_ps(V4, _mm_add_ps(ki4, gather4(kappa.data(), c))),
+                                        _mm_loadu_ps(fluidNbr_.gradFactor.data() + k));
+            ax = _mm_add_ps(ax, _mm_mul_ps(s, d.dx));
+            ay = _mm_add_ps(ay, _mm_mul_ps(s, d.dy));
+            az = _mm_add_ps(az, _mm_mul_ps(s, d.dz));
+        }
+        acc = -Vec3(horizontalSum(ax), horizontalSum(ay), horizontalSum(az));
+#endif
+        for (; k < end; ++k) {
+            const uint32_t j = fluidNbr_.index[k];
+            acc -= (V * (ki + kappa[j]) * fluidNbr_.gradFactor[k]) * (xi - x_[j]);
+        }
+        if (ki != 0)
+            for (uint32_t k = boundaryNbr_.begin(i); k < boundaryNbr_.end(i); ++k) {
+                const uint32_t b = boundaryNbr_.index[k];
+                acc -= (kWallMirror * bVolume_[b] * ki * boundaryNbr_.gradFactor[k]) * (xi - bx_[b]);
+            }
+        a_[i] = acc;
+    });
+}
+
+} // namespace ferro
