@@ -3,6 +3,7 @@
 #include "sim/magnets/MagnetKinds.hpp"
 
 #include "sim/core/Constants.hpp"
+#include "sim/magnets/BodyScale.hpp"
 #include "sim/magnets/MagnetField.hpp"
 
 #include <Eigen/Geometry>
@@ -15,7 +16,6 @@ namespace ferro {
 
 namespace {
 
-constexpr double kInv4Pi = 1.0 / (4.0 * kPi);
 
 // The unit pole charge's potential is chi(t) / (4 pi), chi = (t^4 + a^8)^(-1/8) of
 // t = r^2 + eps^2: the Plummer-softened 1/r without a body (a = 0), bounded within the
@@ -25,12 +25,9 @@ constexpr double kInv4Pi = 1.0 / (4.0 * kPi);
 struct ChargeProfile {
     double d1 = 0, d2 = 0;
     ChargeProfile(double t, double a) {
-        const double a2 = a * a, c = std::max(t, a2);
-        if (!(c > 0.0)) return;
-        const double u = t / c, v = a2 / c;
-        const double S = c * std::sqrt(std::sqrt(u * u * u * u + v * v * v * v));
-        const double w = t / S, w2 = w * w;
-        const double rs = 1.0 / std::sqrt(S);
+        const BodyScale b(t, a);
+        if (!b.valid) return;
+        const double S = b.S, w = b.w, w2 = w * w, rs = b.rs;
         const double s32 = rs * rs * rs;        // S^-3/2
         d1 = -0.5 * w2 * w * s32;
         d2 = -0.5 * (3.0 * w2 - 4.5 * w2 * w2 * w2) * s32 / S;
@@ -52,9 +49,12 @@ Mat3d chargeGradient(const Vec3d& r, double eps2, double a) {
 
 } // namespace
 
+/// A pole face of magnetization kStrongestMagnetization: sqrt(|q| / (pi M)).
+double barBodyRadius(double strength) { return std::sqrt(std::abs(strength) / (kPi * kStrongestMagnetization)); }
+
 Vec3d barMagnetField(const Magnet& mag, const Vec3d& n, const Vec3d& x) {
     const double eps2 = mag.softening * mag.softening;
-    const double a = magnetBodyRadius(MagnetKind::Bar, mag.strength);
+    const double a = barBodyRadius(mag.strength);
     const Vec3d half = 0.5 * mag.length * n;
     return (mag.strength * kInv4Pi) *
            (chargeField(x - (mag.position + half), eps2, a) - chargeField(x - (mag.position - half), eps2, a));
@@ -62,7 +62,7 @@ Vec3d barMagnetField(const Magnet& mag, const Vec3d& n, const Vec3d& x) {
 
 Mat3d barMagnetGradient(const Magnet& mag, const Vec3d& n, const Vec3d& x) {
     const double eps2 = mag.softening * mag.softening;
-    const double a = magnetBodyRadius(MagnetKind::Bar, mag.strength);
+    const double a = barBodyRadius(mag.strength);
     const Vec3d half = 0.5 * mag.length * n;
     return (mag.strength * kInv4Pi) *
            (chargeGradient(x - (mag.position + half), eps2, a) - chargeGradient(x - (mag.position - half), eps2, a));

@@ -4,6 +4,7 @@
 #include "sim/magnets/MagnetKinds.hpp"
 
 #include "sim/core/Constants.hpp"
+#include "sim/magnets/BodyScale.hpp"
 #include "sim/magnets/MagnetField.hpp"
 
 #include <Eigen/Geometry>
@@ -16,7 +17,6 @@ namespace ferro {
 
 namespace {
 
-constexpr double kInv4Pi = 1.0 / (4.0 * kPi);
 
 /// phi(t) = (t^4 + a^8)^(-3/8) of t = r^2 + eps^2 (Plummer-softened r^2) and its first two
 /// derivatives: the dipole's potential is m . r phi / (4 pi). Without a body (a = 0) it is
@@ -29,19 +29,16 @@ constexpr double kInv4Pi = 1.0 / (4.0 * kPi);
 struct DipoleProfile {
     double phi = 0, d1 = 0, d2 = 0;
     DipoleProfile(double t, double a) {
-        const double a2 = a * a, c = std::max(t, a2);
-        if (!(c > 0.0)) return;
-        const double u = t / c, v = a2 / c;
-        const double S = c * std::sqrt(std::sqrt(u * u * u * u + v * v * v * v));
-        const double w = t / S, w2 = w * w;
-        const double rs = 1.0 / std::sqrt(S);
+        const BodyScale b(t, a);
+        if (!b.valid) return;
+        const double S = b.S, w = b.w, w2 = w * w, rs = b.rs;
         phi = rs * rs * rs;                    // S^-3/2
         d1 = -1.5 * w2 * w * phi / S;          // -3/2 w^3 S^-5/2
         d2 = -1.5 * (3.0 * w2 - 5.5 * w2 * w2 * w2) * phi / (S * S);
     }
 };
 
-double bodyRadius(const Magnet& mag) { return magnetBodyRadius(MagnetKind::Dipole, mag.strength); }
+double bodyRadius(const Magnet& mag) { return dipoleBodyRadius(mag.strength); }
 
 Vec3d dipoleField(const Vec3d& m, const Vec3d& r, double eps2, double a) {
     // H = -grad (m . r phi / 4 pi) = -(m phi + 2 phi' (m . r) r) / 4 pi.
@@ -59,6 +56,11 @@ Mat3d dipoleGradient(const Vec3d& m, const Vec3d& r, double eps2, double a) {
 }
 
 } // namespace
+
+/// A sphere of magnetization kStrongestMagnetization: (3 |m| / (4 pi M))^(1/3).
+double dipoleBodyRadius(double strength) {
+    return std::cbrt(3.0 * std::abs(strength) / (4.0 * kPi * kStrongestMagnetization));
+}
 
 Vec3d dipoleMagnetField(const Magnet& mag, const Vec3d& n, const Vec3d& x) {
     return dipoleField(mag.strength * n, x - mag.position, mag.softening * mag.softening, bodyRadius(mag));

@@ -132,7 +132,7 @@ void loopFieldCyl(double I, double a, double eps, double rho, double z,
 // The clamp radius: the softening, and at least the thinnest wire that carries the current
 // (magnetBodyRadius): the field beside a real wire is bounded by its thickness.
 double loopSoftening(const Magnet& mag) {
-    return std::max({mag.softening, magnetBodyRadius(MagnetKind::Loop, mag.strength), 0.0});
+    return std::max({mag.softening, loopBodyRadius(mag.strength), 0.0});
 }
 
 Vec3d loopField(const Magnet& mag, const Vec3d& n, const Vec3d& x) {
@@ -160,6 +160,9 @@ double ellipticE(double m) {
     ellipticKE(m, 1.0 - m, K, E);
     return E;
 }
+
+/// The wire that carries the current at kStrongestCurrentDensity: sqrt(|I| / (pi J)).
+double loopBodyRadius(double strength) { return std::sqrt(std::abs(strength) / (kPi * kStrongestCurrentDensity)); }
 
 Vec3d loopMagnetField(const Magnet& mag, const Vec3d& n, const Vec3d& x) {
     return loopField(mag, n, x);

@@ -1,24 +1,11 @@
 #include "sim/magnets/MagnetKinds.hpp"
 
-#include "sim/core/Constants.hpp"
-
-#include <cmath>
-
 #include <iterator>
 #include <stdexcept>
 
 namespace ferro {
 
-double magnetBodyRadius(MagnetKind kind, double strength) {
-    const double s = std::abs(strength);
-    switch (kind) {
-    case MagnetKind::Dipole: return std::cbrt(3.0 * s / (4.0 * kPi * kStrongestMagnetization));
-    case MagnetKind::Bar: return std::sqrt(s / (kPi * kStrongestMagnetization));
-    case MagnetKind::Loop: return std::sqrt(s / (kPi * kStrongestCurrentDensity));
-    case MagnetKind::Uniform: return 0.0;
-    }
-    return 0.0;
-}
+double magnetBodyRadius(MagnetKind kind, double strength) { return magnetKindInfo(kind).bodyRadius(strength); }
 
 const MagnetKindInfo& magnetKindInfo(MagnetKind kind) {
     const size_t i = static_cast<size_t>(kind);

@@ -5,9 +5,11 @@
 // Adding a kind touches two files:
 //   1. this header: its MagnetKind value, the declarations of its field and gradient, and
 //      its row in kMagnetKinds (name, strength key, which keys it reads, what is drawn);
-//   2. sim/magnetics/<Name>Magnet.cpp: the field H [A/m] and its Jacobian [A/m^2].
+//   2. sim/magnets/<Name>Magnet.cpp: the field H [A/m], its Jacobian [A/m^2] and the radius
+//      of the smallest body that carries the strength.
 // The scene parser (MagnetScene.cpp), the particle-file header (MagnetState.cpp), the
-// field sum (MagnetField.cpp) and ferro-pov's magnet bodies all read the table.
+// field sum (MagnetField.cpp), the fluid's seeding and obstacles (sim/sph) and ferro-pov's
+// magnet bodies all read the table.
 #include "sim/core/Types.hpp"
 
 #include <string>
@@ -43,6 +45,15 @@ constexpr double kStrongestCurrentDensity = 1e9;
 /// twice this radius and bounded within it (DipoleMagnet.cpp), the loop is clamped at it.
 double magnetBodyRadius(MagnetKind kind, double strength);
 
+/// The solid the fluid keeps out of (sim/sph/MagnetObstacles): the points within the body
+/// radius (plus a clearance) of the magnet's core.
+enum class MagnetCore {
+    None,    ///< no solid (a uniform field)
+    Point,   ///< a sphere around `position`
+    Segment, ///< a capsule around the segment of `length` along the axis through `position`
+    Ring     ///< a torus around the circle of `radius` about the axis through `position`
+};
+
 /// The body ferro-pov draws for a magnet.
 enum class MagnetBody {
     None, ///< nothing (a uniform field has no body)
@@ -53,6 +64,8 @@ enum class MagnetBody {
 /// Field and Jacobian of one magnet at x [m]; `axis` is its unit direction.
 using MagnetFieldFn = Vec3d (*)(const Magnet& magnet, const Vec3d& axis, const Vec3d& x);
 using MagnetGradientFn = Mat3d (*)(const Magnet& magnet, const Vec3d& axis, const Vec3d& x);
+/// Radius [m] of the smallest body that carries `strength` (see magnetBodyRadius).
+using MagnetBodyRadiusFn = double (*)(double strength);
 
 struct MagnetKindInfo {
     MagnetKind kind;
@@ -71,31 +84,38 @@ struct MagnetKindInfo {
     bool positioned;          ///< reads `position` and `softening` (false: same everywhere)
     bool usesLength;          ///< `length` required: the distance between the poles
     bool usesRadius;          ///< `radius` required: the loop's radius
-    MagnetBody body;
+    MagnetBody body;          ///< what ferro-pov draws
+    MagnetCore core;          ///< the solid the fluid keeps out of
     MagnetFieldFn field;
     MagnetGradientFn gradient;
+    MagnetBodyRadiusFn bodyRadius;
 };
 
 Vec3d dipoleMagnetField(const Magnet&, const Vec3d&, const Vec3d&);    // DipoleMagnet.cpp
 Mat3d dipoleMagnetGradient(const Magnet&, const Vec3d&, const Vec3d&);
+double dipoleBodyRadius(double strength);
 Vec3d barMagnetField(const Magnet&, const Vec3d&, const Vec3d&);       // BarMagnet.cpp
 Mat3d barMagnetGradient(const Magnet&, const Vec3d&, const Vec3d&);
+double barBodyRadius(double strength);
 Vec3d uniformMagnetField(const Magnet&, const Vec3d&, const Vec3d&);   // UniformMagnet.cpp
 Mat3d uniformMagnetGradient(const Magnet&, const Vec3d&, const Vec3d&);
+double uniformBodyRadius(double strength);
 Vec3d loopMagnetField(const Magnet&, const Vec3d&, const Vec3d&);      // LoopMagnet.cpp
 Mat3d loopMagnetGradient(const Magnet&, const Vec3d&, const Vec3d&);
+double loopBodyRadius(double strength);
 
 /// One row per kind, in MagnetKind order.
 inline const MagnetKindInfo kMagnetKinds[] = {
-    // kind                 name       strength key     unit   max strength  pos.   length radius body
-    {MagnetKind::Dipole, "dipole", "moment", "A m^2", 1e6, true, false, false, MagnetBody::Rod, &dipoleMagnetField,
-     &dipoleMagnetGradient},
-    {MagnetKind::Bar, "bar", "pole_strength", "A m", 1e6, true, true, false, MagnetBody::Rod, &barMagnetField,
-     &barMagnetGradient},
-    {MagnetKind::Uniform, "uniform", "field", "A/m", 1e9, false, false, false, MagnetBody::None, &uniformMagnetField,
-     &uniformMagnetGradient},
-    {MagnetKind::Loop, "loop", "current", "A", 1e9, true, false, true, MagnetBody::Ring, &loopMagnetField,
-     &loopMagnetGradient},
+    // kind, name, strength key, unit, max strength, positioned, length, radius, drawn body, solid core,
+    // field, gradient, body radius
+    {MagnetKind::Dipole, "dipole", "moment", "A m^2", 1e6, true, false, false, MagnetBody::Rod, MagnetCore::Point,
+     &dipoleMagnetField, &dipoleMagnetGradient, &dipoleBodyRadius},
+    {MagnetKind::Bar, "bar", "pole_strength", "A m", 1e6, true, true, false, MagnetBody::Rod, MagnetCore::Segment,
+     &barMagnetField, &barMagnetGradient, &barBodyRadius},
+    {MagnetKind::Uniform, "uniform", "field", "A/m", 1e9, false, false, false, MagnetBody::None, MagnetCore::None,
+     &uniformMagnetField, &uniformMagnetGradient, &uniformBodyRadius},
+    {MagnetKind::Loop, "loop", "current", "A", 1e9, true, false, true, MagnetBody::Ring, MagnetCore::Ring,
+     &loopMagnetField, &loopMagnetGradient, &loopBodyRadius},
 };
 
 /// The row of `kind`.

@@ -6,6 +6,9 @@
 
 namespace ferro {
 
+/// A uniform field has no source body.
+double uniformBodyRadius(double) { return 0.0; }
+
 Vec3d uniformMagnetField(const Magnet& mag, const Vec3d& n, const Vec3d&) {
     return mag.strength * n;
 }

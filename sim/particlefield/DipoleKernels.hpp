@@ -23,7 +23,6 @@ typedef float v4sf __attribute__((vector_size(16)));
 namespace ferro {
 namespace dipole_detail {
 
-constexpr double kInv4Pi = 1.0 / (4.0 * kPi);
 // Smallest squared distance (scaled units, i.e. in mean particle radii^2) a kernel divides
 // by. Only reached by zero-volume particles (moment 0) and exact coincidences, which the
 // inside test catches first for real particles; keeps r^-7 finite in float (1e28).

@@ -170,7 +170,7 @@ FluidSeed seedFluid(const SimScene& scene, const Container& container) {
             size_t worst = size_t(-1), most = 0, k = 0;
             for (size_t m = 0; m < scene.magnets.size(); ++m) {
                 const Magnet mag = scene.magnets[m].at(0.0);
-                if (mag.kind == MagnetKind::Uniform || !(magnetBodyRadius(mag.kind, mag.strength) > 0)) continue;
+                if (!(magnetBodyRadius(mag.kind, mag.strength) > 0)) continue;
                 if (worst == size_t(-1)) worst = m;
                 const size_t in = size_t(std::count_if(pts.begin(), pts.end(), [&](const Vec3d& p) { return isInside(bodies[k], p); }));
                 if (in > most) { most = in; worst = m; }

@@ -28,19 +28,20 @@ std::vector<MagnetObstacle> magnetObstacles(const std::vector<MagnetTrack>& trac
     std::vector<MagnetObstacle> out;
     for (const MagnetTrack& track : tracks) {
         const Magnet m = track.at(t1);
-        if (m.kind == MagnetKind::Uniform) continue;
-        const double body = magnetBodyRadius(m.kind, m.strength);
+        const MagnetKindInfo& kind = magnetKindInfo(m.kind);
+        if (kind.core == MagnetCore::None) continue;
+        const double body = kind.bodyRadius(m.strength);
         if (!(body > 0)) continue;
         MagnetObstacle o;
         o.axis = unitOr(m.direction, Vec3d::UnitZ());
         o.radius = body + clearance;
         o.a = o.b = m.position;
         double reach = o.radius;
-        if (m.kind == MagnetKind::Bar) {
+        if (kind.core == MagnetCore::Segment) {
             o.a = m.position - 0.5 * m.length * o.axis;
             o.b = m.position + 0.5 * m.length * o.axis;
             reach += 0.5 * m.length;
-        } else if (m.kind == MagnetKind::Loop) {
+        } else if (kind.core == MagnetCore::Ring) {
             o.ringRadius = m.radius;
             reach += m.radius;
         }
