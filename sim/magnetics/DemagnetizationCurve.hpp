@@ -19,7 +19,7 @@
 // Ferrohydrodynamics, ch. 5) asks rho g z_s = mu0 (F(H) + M_n^2 / 2) + C with H and M the
 // total field and magnetization just inside the surface, M_n the normal component: the
 // magnetic pressure plus the normal traction. So G is fitted to the surface pressure
-// P = F(H) + M_n^2 / 2 of surface samples. Two fits (MagnetizationParams::CurveFit):
+// P = F(H) + M_n^2 / 2 of surface samples. Two fits (the simulation uses FreeSurface; Nodes is its fallback with too few samples):
 //  - Fit::Nodes (the default): r piecewise linear in log h on K nodes evenly spaced between
 //    the smallest and largest h of the solve, constant beyond them. Least squares of each
 //    particle's M along the applied field against r(h) M_law(h) and, given samples,

@@ -54,7 +54,7 @@ struct MagnetizationParams {
     ///   Body     (default) a body force per particle from the magnets' field gradient,
     ///            mu0 M_f(|H_magnets|) grad |H_magnets|: with `external` M_f is the Langevin
     ///            law, with a self-consistent solver a curve fitted at each solve so that its
-    ///            potential at surface samples (curve_fit, below) is their F(H) + M_n^2 / 2,
+    ///            potential at free-surface samples is their F(H) + M_n^2 / 2,
     ///            normal traction included (sim/magnetics/DemagnetizationCurve.hpp).
     ///   Surface  (experimental) the Kelvin force density mu0 (M . grad) H of the TOTAL
     ///            field, which for M parallel to H is the gradient of the magnetic pressure
@@ -62,21 +62,7 @@ struct MagnetizationParams {
     ///            surface, C - mu0 (F(H) + M_n^2 / 2) (Rosensweig's ferrohydrostatic
     ///            boundary condition, normal traction included).
     enum class Force { Surface, Body };
-    /// Body force with a self-consistent solver: what the force's curve M_f(|H_magnets|)
-    /// (sim/magnetics/DemagnetizationCurve.hpp) is fitted to.
-    ///   FreeSurface  (default) the free surface's F(H) + M_n^2 / 2 (colour gradient and
-    ///                exposure, half a spacing out), each fit averaged with the last over
-    ///                0.1 s: resting pools keep to the Bernoulli law within 4.4 / 4.5 % of
-    ///                the heap's rise (chi0 0.5 / 1.5) at 10,240 particles, 9.5 / 5.6-32 %
-    ///                at 2,560.
-    ///   Boundary     (the default until 2026-12-02) the particles' demagnetized M, and the
-    ///                magnetic pressure F(H) + M_n^2 / 2 where the solve's dipole kernels are
-    ///                a fifth empty: at rest the floor and walls. Resting pools miss the
-    ///                Bernoulli law by 13 % of the heap's rise at chi0 0.5, 39-44 % at 1.5
-    ///                (too tall).
-    enum class CurveFit { Boundary, FreeSurface };
     Force force = Force::Body;
-    CurveFit curveFit = CurveFit::FreeSurface;
     bool enabled() const { return susceptibility > 0; }
 };
 

@@ -169,33 +169,14 @@ void FluidMagnetics::solve(const std::vector<Vec3>& x, const std::function<Surfa
             h[i] = he.norm();
             along[i] = h[i] > 0 ? M_[i].cast<double>().dot(he) / h[i] : 0.0;
         });
-        // The curve's potential is fitted to the magnetic pressure of surface samples, so
+        // The curve's potential is fitted to the magnetic pressure of free-surface samples, so
         // that a surface at rest obeys the ferrohydrostatic Bernoulli law
-        // (DemagnetizationCurve.hpp; MagnetizationParams::CurveFit).
-        if (law_.curveFit == MagnetizationParams::CurveFit::FreeSurface) {
-            // The curve's memory (kCurveMemory): each fit moves the last curve towards this
-            // solve's surface by 1 - exp(-dt / kCurveMemory), dt the time since the last fit.
-            const double memory = curveFitTime_ <= time_ ? std::exp(-(time_ - curveFitTime_) / kCurveMemory) : 0.0;
-            curve_.fit(h, along, surfaceSamples(x, surface()), DemagnetizationCurve::Fit::FreeSurface, memory);
-            curveFitTime_ = time_;
-        } else {
-            // The solve's own surface weights (the dipole kernel at least a fifth empty): on
-            // a resting pool the floor and the walls, not the free surface (0 of ~490 samples
-            // on it: the kernel is 35 % empty at a floor particle, only 7 % under the top
-            // layer), and the heap at chi0 1.5 stands too tall (README, magnetics).
-            std::vector<DemagnetizationCurve::SurfaceSample> boundary;
-            const std::vector<Real>& w = solver_->surfaceWeight();
-            const std::vector<Vec3>& normal = solver_->surfaceNormal();
-            if (w.size() == n && normal.size() == n)
-                for (size_t i = 0; i < n; ++i) {
-                    const double weight = double(w[i]) - 0.2;
-                    if (!(weight > 0) || !(h[i] > 0)) continue;
-                    const double mn = M_[i].cast<double>().dot(normal[i].cast<double>());
-                    const double p = langevinEnergy(H_[i].cast<double>().norm(), law_.susceptibility, law_.saturation) + 0.5 * mn * mn;
-                    boundary.push_back({h[i], p, weight});
-                }
-            curve_.fit(h, along, boundary, DemagnetizationCurve::Fit::Nodes);
-        }
+        // (DemagnetizationCurve.hpp). The curve's memory (kCurveMemory): each fit moves the
+        // last curve towards this solve's surface by 1 - exp(-dt / kCurveMemory), dt the time
+        // since the last fit.
+        const double memory = curveFitTime_ <= time_ ? std::exp(-(time_ - curveFitTime_) / kCurveMemory) : 0.0;
+        curve_.fit(h, along, surfaceSamples(x, surface()), DemagnetizationCurve::Fit::FreeSurface, memory);
+        curveFitTime_ = time_;
     }
     HextSolved_ = Hext_;
     extSolved2_ = deterministicSum(n, [&](size_t i) { return double(Hext_[i].squaredNorm()); });

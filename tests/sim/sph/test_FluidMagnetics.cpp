@@ -294,10 +294,6 @@ BernoulliCheck bernoulliCheck(const std::vector<RingProfile>& looks, const Fluid
     return out;
 }
 
-BernoulliCheck bernoulliCheck(const FluidSimulation& sim, double wallRadius) {
-    return bernoulliCheck(std::vector<RingProfile>{ringProfile(sim, wallRadius)}, sim);
-}
-
 /// Advances a resting pool by `span` [s], looking at its surface every `every` [s] (the
 /// first look now): the law on the mean of the looks.
 BernoulliCheck bernoulliCheckOverTime(FluidSimulation& sim, double wallRadius, double span = 0.5, double every = 0.05) {
@@ -635,9 +631,9 @@ TEST_CASE("the induced field is re-solved by the tolerance rule or every K steps
 }
 
 TEST_CASE("particle files carry H, M and the magnets at the frame's time, and resume is exact", "[magnetics][cli]") {
-    // Both curve fits: the free-surface curve remembers its last fits (FluidMagnetics::
-    // kCurveMemory), so its files carry the curve (magnetization_curve) for the resume.
-    const std::string fit = GENERATE(std::string("boundary"), std::string("free_surface"));
+    // The free-surface curve remembers its last fits (FluidMagnetics::kCurveMemory), so the
+    // files carry the curve (magnetization_curve) for the resume.
+    const std::string fit = "free_surface";
     const std::string sim = std::string(FERRO_BINARY_DIR) + "/bin/ferro-sim";
     const fs::path dir = fs::temp_directory_path() / ("ferro_test_mag_" + std::to_string(getpid()));
     fs::remove_all(dir);
@@ -736,10 +732,8 @@ TEST_CASE("a pool over a magnet held still comes to rest in ferrohydrostatic bal
         double susceptibility;
         std::string curveFit = "free_surface";   // the default
     };
-    // The default fit for both solvers and chi0; the old default ("boundary") once, that it
-    // still rests and stays where it was measured.
     const Case c = GENERATE(Case{"dfsph", "external", 1.5}, Case{"wcsph", "external", 1.5}, Case{"dfsph", "auto", 0.5},
-                            Case{"dfsph", "auto", 1.5}, Case{"wcsph", "auto", 1.5}, Case{"dfsph", "auto", 1.5, "boundary"});
+                            Case{"dfsph", "auto", 1.5}, Case{"wcsph", "auto", 1.5});
     // examples/ferrohydrostatic_pool.toml: 2,560 particles, a 3 A m^2 dipole 2 cm under the floor.
     FluidSimulation sim(loadExample("ferrohydrostatic_pool.toml",
                                     {"sim.solver=\"" + c.solver + "\"", "magnetization.solver=\"" + c.magnetization + "\"",
@@ -791,10 +785,7 @@ TEST_CASE("a pool over a magnet held still comes to rest in ferrohydrostatic bal
              << law.worstCapillary << " Pa; on the axis mu0 F = " << law.pressure << " Pa, mu0 Mn^2/2 = "
              << law.traction << " Pa, sigma div n = " << law.capillary << " Pa; RMS speed " << 1e3 * rms << " mm/s");
         REQUIRE(law.traction > 0.2 * law.pressure);   // the traction term matters here
-        if (c.curveFit == "boundary")
-            REQUIRE(law.worst < (c.susceptibility < 1 ? 0.20 : 0.50) * law.rise);
-        else
-            REQUIRE(law.worst < (c.susceptibility < 1 ? 0.20 : 0.40) * law.rise);
+        REQUIRE(law.worst < (c.susceptibility < 1 ? 0.20 : 0.40) * law.rise);
     }
 }
 
@@ -846,28 +837,9 @@ TEST_CASE("a pool at fine spacing over a strong magnet comes to rest (DFSPH and 
     }
 }
 
-// How much of the suite pool's deviation from the law is surface tension: the same pool
-// (2,560 particles, DFSPH, chi0 1.5) with and without it. Hidden, run by hand with
-//     build/bin/ferro_sph_tests "[bernoulli-tension]"
-// Measured (one look at 2 s, the surface as in ringProfile): 42.9 % without tension, 40.1 %
-// with it (sigma div n 1.3 Pa on the axis; adding the capillary term to the law changes the
-// deviation by 0.4 %): not the cause.
-TEST_CASE("the suite pool's Bernoulli deviation with and without surface tension", "[.][bernoulli-tension][magnetics]") {
-    const double sigma = GENERATE(0.0, 0.025);
-    FluidSimulation sim(loadExample("ferrohydrostatic_pool.toml", {"fluid.surface_tension=" + std::to_string(sigma),
-                                                                   "magnetization.curve_fit=\"boundary\""}));
-    const double rms = settleForTwoSeconds(sim);
-    const BernoulliCheck law = bernoulliCheck(sim, 0.025);   // one look, as measured above
-    WARN("Bernoulli, 2,560 particles, chi0 1.5, sigma " << sigma << ": centre rise " << law.rise
-         << " Pa, worst deviation " << law.worst << " Pa (" << 100 * law.worst / law.rise
-         << " %), with the capillary term " << law.worstCapillary << " Pa (" << 100 * law.worstCapillary / law.rise
-         << " %); sigma div n on the axis " << law.capillary << " Pa; RMS speed " << 1e3 * rms << " mm/s");
-    REQUIRE(rms < 0.001);
-}
-
 // The same pool and law at four times the particles (10,240, spacing 1.6x finer): settled for
 // 2 s, then the Bernoulli law on the mean of 11 looks over 2.0-2.5 s, the surface half a
-// spacing out from the column tops (ringProfile). `fit` is magnetization.curve_fit.
+// spacing out from the column tops (ringProfile). 
 static BernoulliCheck finePoolBernoulli(double chi0, const std::string& fit, double& rms) {
     FluidSimulation sim(loadExample("ferrohydrostatic_pool.toml",
                                     {"fluid.block.0.count=10240", "magnetization.susceptibility=" + std::to_string(chi0),
@@ -895,22 +867,6 @@ TEST_CASE("a finer pool over a still magnet keeps to the Bernoulli law within 10
     REQUIRE(rms < 0.001);
     REQUIRE(law.traction > 0.2 * law.pressure);   // the traction term matters here
     REQUIRE(law.worst < 0.10 * law.rise);
-}
-
-// The same with the old default, the "boundary" fit: hidden, run by hand with
-//     build/bin/ferro_sph_tests "[bernoulli-fine]"
-// Measured (2026-12-02): chi0 0.5 worst deviation 10.1 % of the centre rise (36 Pa), chi0 1.5
-// 34.3 % (rise 52 Pa; on the axis the traction term mu0 Mn^2/2 = 40 Pa against mu0 F = 28 Pa),
-// the heap too tall on the axis; four times the particles of the suite's pool (13.1 / 38.8 %)
-// bring it little closer, so its miss at 1.5 is the fit's, not the resolution's (README,
-// magnetics). The bounds hold it where it is.
-TEST_CASE("a finer pool over a still magnet with the boundary fit: the Bernoulli law within 15 / 45 % (chi0 0.5 / 1.5)",
-          "[.][bernoulli-fine][magnetics][slow]") {
-    const double chi0 = GENERATE(0.5, 1.5);
-    double rms = 0;
-    const BernoulliCheck law = finePoolBernoulli(chi0, "boundary", rms);
-    REQUIRE(rms < 0.001);
-    REQUIRE(law.worst < (chi0 < 1 ? 0.15 : 0.45) * law.rise);
 }
 
 namespace {
