@@ -1,104 +1,14 @@
 #pragma once
 // The magnetic field of magnetized fluid particles: exact all-pairs sums and a Barnes-Hut
-// octree, over the same particles in the same (Morton) order.
-//
-// Discretization (default: smoothed dipoles). Particle j carries the moment m_j = V_j M_j
-// spread over a Wendland C2 kernel of support radius a_j = smoothing * V_j^(1/3)
-// (MagnetizationParams::smoothing, default 2.5 particle spacings):
-//   W(r) = 21 / (2 pi a^3) (1 - q)^4 (1 + 4 q),  q = r / a < 1   (integral 1).
-// The field of that smoothed magnetization is H = grad (m . grad psi) with psi the Newton
-// potential of W (magnetic charge -m . grad W): the smoothed-dipole idea of Huang, Haedrich
-// and Michels, "On the accurate large-scale simulation of ferrofluids", SIGGRAPH 2019; the
-// kernel choice and closed form here are derived for this code. With the enclosed kernel
-// mass Q(r) = int_{|s|<r} W (H = (d^2 psi/dr^2) r^ r^ + (dpsi/dr / r)(I - r^ r^) applied
-// to m, dpsi/dr = -Q / (4 pi r^2)):
-//   4 pi H = (3 Q / r^5 - 4 pi W / r^2) r (r . m) - (Q / r^3) m
-//   Q = 14 q^3 - 84 q^5 + 140 q^6 - 90 q^7 + 21 q^8   (q < 1),  Q = 1 outside,
-// so outside the support (r >= a) it is exactly the point dipole
-//   4 pi H = 3 r (r . m) / r^5 - m / r^3,
-// and inside it is a bounded polynomial (the coefficients in DipoleTree.cpp). At the centre
-// H = -W(0) m / 3 = -(7 / (2 pi a^3)) m: the particle's self field, which for a lone particle
-// is -7 / (2 pi smoothing^3) M (-0.071 M at 2.5) instead of a sphere's -M / 3; in a filled
-// region the overlapping kernels of the neighbours make up the rest. The Jacobian (the Kelvin
-// force's dH/dx) is the derivative of the same closed form, bounded everywhere. Why this
-// kernel: W has a positive Fourier transform (Wendland functions are positive definite in
-// 3D), so the particle field operator A is negative semidefinite for ANY particle positions,
-// and I - chi A has its spectrum in [1, 1 + chi]: the self-consistent solve converges for
-// every chi, where the sphere model's indefinite near field stalls at chi >~ 3 on disordered
-// sets. Inside a uniformly magnetized region at least one support from its surface the
-// smoothed field is exactly the continuum one (a radially symmetric kernel does not change
-// a uniform interior field), so the macroscopic field is right without any lattice symmetry.
-//
-// Surface term. A particle within one support of the fluid's surface samples, through its
-// neighbours' kernels, the smoothed field on both sides of the surface, where the continuum
-// field jumps by the normal component (M . n) n. That biases the magnetization of the
-// surface layer (a sphere's poles pick up extra moment, i.e. the ball acts prolate: +5 % on
-// the interior field of a 10-spacing ball at chi = 10). The field at particle k therefore
-// gets the outside part removed:
-//   H_k -= max(0, 1 - n_k) (n_k_hat . M_k) n_k_hat,   n_k = sum_j V_j W_j(x_k - x_j),
-//   n_k_hat = -grad n_k / |grad n_k|
-// (n_k is the filled fraction of k's kernel, 1 inside the fluid; the term is zero there).
-// It is local and positive semidefinite, so the operator keeps its spectrum bound. It acts
-// at particle centres only: fieldAt() and gradientAt() at arbitrary points give the smoothed
-// field itself, fieldAtParticle*() and fieldAtParticles() include the term. It sets in
-// smoothly between deficits 1 - n_k of 0.05 and 0.15: inside a disordered fluid n scatters by
-// a few percent, and those interior particles would get a one-sided term along a random
-// normal (a bias of ~1 % of the interior field at chi = 10 on a 0.2-jittered ball).
-//
-// Local correction (computeLocalCorrection; MagnetizationParams::localCorrection, off by
-// default in the simulation: MagnetizationParams.hpp says why; with it on, the surface term's
-// onset above applies, off the term acts from any deficit as before). The smoothed field of a uniform M is exact in the continuum, but the discrete
-// sum at particle k sees its near neighbours' directions through the bounded near field
-// (3 Q / r^3 - 4 pi W) r^ r^: on a disordered set that is a random, traceless-dominated
-// error of a few percent of M per particle, amplified by the self-consistent solve (on a
-// ball jittered by 0.2 spacings: 5.6 % RMS field error at chi = 3, 11.5 % at 10, single
-// particles 41 % off). It is not a density error: volumes from the SPH density
-// (V = 1 / sum_j W_ij, paper eq. 7's m_j / rho_j: 4.8 % against 5.0 % at chi = 3, tests'
-// "[.figures]") or volumes iterated until this kernel's sum is 1 within 0.3 % at every
-// particle (5.9 %, measured once) leave it where it is. The correction
-// measures it: K_k = the field at k of a uniform unit M along each axis (three field
-// evaluations of the operator itself, surface term included) is the body's demagnetization
-// tensor N(x_k), smooth on the body's scale, plus the particle-scale noise. Minus the
-// smooth part of K at x_k (a kernel-weighted linear least-squares fit to the neighbours' K
-// over twice the support, k itself excluded: a plain mean would be biased where the
-// neighbourhood is one-sided, near a surface or a floor, and N varies there) it
-// is the noise D_k, and the field at particle k becomes H_k - D_k M_k. Like SPH's kernel
-// gradient correction it makes the discrete operator reproduce the uniform case; it acts
-// in the interior only (weight rising from fill n_k = 0.7 to 0.8), where the surface term
-// does not. Measured: jittered ball RMS 1.2 % (chi 3) and 2.2 % (chi 10), worst 7.6 %; a
-// ball from a settled SPH tank 0.86 % (was 0.93 %) at chi 10. The operator is no longer
-// exactly semidefinite, but D is a few percent: Newton-GMRES takes the same number of
-// evaluations (tests up to chi 10). Cost: three field evaluations and one neighbour pass
-// per build.
-//
-// smoothing = 0 selects the older model: particle j a uniformly magnetized sphere of its
-// volume (radius a_j = (3 V_j / 4 pi)^(1/3)), point dipole outside, -M_j / 3 inside. On a
-// cubic lattice the other particles' dipoles give the Lorentz local field H_macro + M / 3
-// and the own sphere's -M / 3 cancels the cavity term (Clausius-Mossotti); on any other
-// arrangement (a settled SPH state is disordered and slightly compressed) the near sums do
-// not cancel: 6-12 % field error at chi = 0.5-1 and no convergence at chi >= 3 (tests in
-// tests/sim/magnetics/test_MagnetizationSolver.cpp).
-//
-// Tree. Particles are sorted along a Morton curve (cubic root cell); octree cells are
-// contiguous index ranges. Each cell carries the multipole expansion of its dipoles about
-// its volume centroid: total moment, quadrupole and octupole (the first and second moments
-// of the dipoles, symmetric trace-free parts). The centroid is fixed by the positions, so
-// the operator stays linear in M, as the self-consistent solver needs. Opening criterion
-// (classic Barnes-Hut, "cell size / distance"): a cell whose particles' bounding box has
-// largest side L is used as one expansion for targets at distance d > L / theta from its
-// centroid and outside the support (or sphere) of every one of its particles, where each
-// is exactly a point dipole; nearer cells are opened down to leaves, whose particles are
-// summed exactly with the smoothed near field. Targets are grouped by leaf (d is measured to
-// the leaf's box): one interaction list per leaf (cells + particle ranges), built once per
-// set of positions and re-used by every field evaluation of a solve. Measured on a 40,960
-// particle layer: theta 0.5 -> ~0.1-0.4 % RMS error of the particle field, ~200 cells and
-// ~400 particles per target (see tests/bench/bench_magnetization.cpp).
-//
-// Numbers. Positions and moments are float inside (SoA, SSE kernels), scaled by the mean
-// particle radius so that float ranges do not depend on the scene's units. All-pairs sums
-// are float within blocks of 4,096 sources and double across blocks; a tree sum (a few
-// hundred terms) is float; point evaluations (fieldAt, gradientAt) are double throughout.
-// Evaluation is deterministic: every target sums its sources in a fixed order.
+// octree, over the same particles in the same (Morton) order. Particle j's moment V_j M_j is
+// spread over a Wendland C2 kernel of support smoothing * V_j^(1/3) (a point dipole outside
+// it, bounded inside; smoothing = 0: a uniformly magnetized sphere); the field at a particle
+// centre also drops the outside part of the normal jump near the free surface (surface term)
+// and, optionally, the particle-scale noise of the operator (local correction). Far cells
+// enter as dipole, quadrupole and octupole expansions (opening angle theta). Float SoA with
+// SSE inside, scaled by the mean particle radius; point evaluations in double; every target
+// sums its sources in a fixed order. The derivation, why this kernel, and the measurements:
+// docs/physics/particle-field.md.
 #include "sim/core/Types.hpp"
 
 #include <Eigen/Core>
