@@ -8,6 +8,7 @@
 #include "sim/core/ParticleFile.hpp"
 #include "sim/core/SceneDocument.hpp"
 #include "sim/scene/SimSceneFile.hpp"
+#include "sim/spatial/HashGrid.hpp"
 
 #include <tbb/parallel_for.h>
 
@@ -229,6 +230,30 @@ SpikeInput loadSpikeInput(const SpikeScene& scene, const std::string& surfacePat
     return in;
 }
 
+namespace {
+
+/// The input surface's vertex velocities carried to `points` (the spiky mesh's vertices before
+/// displacement, on or next to the input surface): each takes its nearest input vertex's. The
+/// spikes move with the surface they stand on; their own growth is not added yet. Empty when the
+/// surface has no velocities.
+std::vector<Vec3> surfaceVelocityAt(const TriangleMesh& surface, const std::vector<Vec3>& points)
+{
+    if (surface.velocities.empty() || surface.velocities.size() != surface.vertices.size()) return {};
+    double edge = 0;
+    size_t edges = 0;
+    for (const auto& t : surface.triangles)
+        for (int k = 0; k < 3; ++k, ++edges)
+            edge += (surface.vertices[t[size_t(k)]] - surface.vertices[t[size_t((k + 1) % 3)]]).cast<double>().norm();
+    std::vector<Vec3d> vertices(surface.vertices.size());
+    for (size_t i = 0; i < vertices.size(); ++i) vertices[i] = surface.vertices[i].cast<double>();
+    const HashGrid grid(vertices, edges ? std::max(2 * edge / double(edges), 1e-9) : 1e-3);
+    std::vector<Vec3> out(points.size());
+    for (size_t i = 0; i < points.size(); ++i) out[i] = surface.velocities[grid.nearest(points[i].cast<double>())];
+    return out;
+}
+
+} // namespace
+
 SpikeResult spikeFrame(const SpikeScene& scene, const std::string& surfacePath, const std::string& particlePath,
                        const std::string& outPath, int frameHint)
 {
@@ -236,6 +261,7 @@ SpikeResult spikeFrame(const SpikeScene& scene, const std::string& surfacePath, 
     const SpikeInput in = loadSpikeInput(scene, surfacePath, particlePath, frameHint);
     SpikeResult res = addSpikes(in, scene.params);
     TriangleMesh& out = res.mesh;
+    out.velocities = surfaceVelocityAt(in.surface, res.refined.vertices);
     if (!hasComment(out.comments, "magnet_count")) {
         ParticleTable header;
         header.comments = out.comments;

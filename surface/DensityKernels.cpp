@@ -27,9 +27,10 @@ constexpr double kSigma = 315.0 / (64.0 * kPi);
 struct SortedPoints {
     SortedGrid grid;
     std::vector<Vec3> x; ///< positions in grid order
+    std::vector<uint32_t> order; ///< order[k]: the input index of x[k]
 
     SortedPoints(const std::vector<Vec3>& positions, Real radius) {
-        std::vector<uint32_t> tie(positions.size()), order;
+        std::vector<uint32_t> tie(positions.size());
         std::iota(tie.begin(), tie.end(), 0u);
         grid.sort(positions, tie, radius, order);
         x.resize(positions.size());
@@ -100,7 +101,10 @@ std::vector<DensityKernel> buildKernels(const std::vector<Vec3>& positions, cons
     if (n == 0) return kernels;
     if (params.method != SurfaceMethod::Anisotropic) {
         tbb::parallel_for(tbb::blocked_range<size_t>(0, n, 4096), [&](const tbb::blocked_range<size_t>& r) {
-            for (size_t i = r.begin(); i != r.end(); ++i) kernels[i] = isotropicKernel(positions[i], h, volume);
+            for (size_t i = r.begin(); i != r.end(); ++i) {
+                kernels[i] = isotropicKernel(positions[i], h, volume);
+                kernels[i].source = uint32_t(i);
+            }
         });
         return kernels;
     }
@@ -152,11 +156,13 @@ std::vector<DensityKernel> buildKernels(const std::vector<Vec3>& positions, cons
             if (count < nEps || !(largest > 0) || !std::isfinite(largest)) {
                 // Too few neighbours for a meaningful shape: a small round kernel (k_n).
                 kernels[i] = isotropicKernel(centre, h * kn, volume);
+                kernels[i].source = sorted.order[i];
                 continue;
             }
             Eigen::Vector3d s;
             for (int a = 0; a < 3; ++a) s[a] = ks * std::max(ev[a], largest / kr);
             kernels[i] = ellipsoidKernel(centre, eig.eigenvectors(), s, h, volume);
+            kernels[i].source = sorted.order[i];
         }
     });
     return kernels;

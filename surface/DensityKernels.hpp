@@ -13,6 +13,7 @@
 
 #include "sim/core/Types.hpp"
 
+#include <cstdint>
 #include <vector>
 
 namespace ferro {
@@ -24,6 +25,7 @@ struct DensityKernel {
     float m[6];       ///< M as xx, xy, xz, yy, yz, zz [1/m^2]
     float amplitude;  ///< V sigma det(G) [1]
     Vec3 halfExtent;  ///< half size of the kernel's axis-aligned bounding box [m]
+    uint32_t source = 0; ///< the particle it stands for (index into buildKernels' positions)
 
     float q(const Vec3& x) const {
         const Vec3 d = x - centre;

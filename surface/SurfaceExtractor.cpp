@@ -1,5 +1,6 @@
 // Sparse anisotropic-kernel rasterizer on OpenVDB and mesh extraction (see SurfaceExtractor.hpp).
 #include "surface/SurfaceExtractor.hpp"
+#include "surface/VertexVelocity.hpp"
 
 #include "surface/DensityKernels.hpp"
 
@@ -24,6 +25,7 @@
 #include <tbb/tick_count.h>
 
 #include <algorithm>
+#include <functional>
 #include <atomic>
 #include <cmath>
 #include <sstream>
@@ -284,7 +286,11 @@ TriangleMesh toTriangleMesh(std::vector<openvdb::Vec3s>& points, std::vector<ope
     return mesh;
 }
 
-void writeLevelSet(const std::string& path, const TriangleMesh& mesh, double voxelSize) {
+/// The level set of `mesh` as grid "surface" in a .vdb file and, when `velocity` is given, the
+/// fluid's velocity on the same voxels as grid "v" (a staggered-free Vec3f grid, world units
+/// m/s, the VDB convention other tools read for motion blur and advection).
+void writeLevelSet(const std::string& path, const TriangleMesh& mesh, double voxelSize,
+                   const std::function<std::vector<Vec3>(const std::vector<Vec3>&)>& velocity) {
     initOpenVdb();
     auto xform = openvdb::math::Transform::createLinearTransform(voxelSize);
     std::vector<openvdb::Vec3s> points(mesh.vertices.size());
@@ -296,11 +302,30 @@ void writeLevelSet(const std::string& path, const TriangleMesh& mesh, double vox
     FloatGrid::Ptr sdf = openvdb::tools::meshToLevelSet<FloatGrid>(*xform, points, tris, 3.0f);
     sdf->setName("surface");
     sdf->setGridClass(openvdb::GRID_LEVEL_SET);
+    openvdb::GridPtrVec grids{sdf};
+    if (velocity) {
+        // The velocity at every active voxel of the band, in the band's own topology.
+        std::vector<openvdb::Coord> coords;
+        coords.reserve(size_t(sdf->activeVoxelCount()));
+        for (auto it = sdf->cbeginValueOn(); it; ++it) coords.push_back(it.getCoord());
+        std::vector<Vec3> centres(coords.size());
+        for (size_t i = 0; i < coords.size(); ++i) {
+            const openvdb::Vec3d w = xform->indexToWorld(coords[i]);
+            centres[i] = Vec3(Real(w.x()), Real(w.y()), Real(w.z()));
+        }
+        const std::vector<Vec3> v = velocity(centres);
+        openvdb::Vec3fGrid::Ptr vg = openvdb::Vec3fGrid::create(openvdb::Vec3f(0.0f));
+        vg->setTransform(xform->copy());
+        vg->setName("v");
+        vg->setVectorType(openvdb::VEC_CONTRAVARIANT_RELATIVE);
+        auto acc = vg->getAccessor();
+        for (size_t i = 0; i < coords.size(); ++i) acc.setValue(coords[i], openvdb::Vec3f(v[i].x(), v[i].y(), v[i].z()));
+        grids.push_back(vg);
+    }
     try {
         writeFileAtomicallyByPath(path, [&](const std::string& tmp) {
             try {
                 openvdb::io::File file(tmp);
-                openvdb::GridPtrVec grids{sdf};
                 file.write(grids);
                 file.close();
             } catch (const std::exception& e) {
@@ -354,7 +379,14 @@ GridEstimate estimateGrid(const std::vector<Vec3>& positions, const SurfaceParam
 }
 
 TriangleMesh extractSurface(const std::vector<Vec3>& positions, const SurfaceParams& params, double spacing,
-                            const std::string& vdbPath, SurfaceStats* stats) {
+                            const std::string& vdbPath, SurfaceStats* stats, const std::vector<Vec3>* velocities) {
+    if (velocities && velocities->size() != positions.size())
+        throw SurfaceError(std::to_string(velocities->size()) + " velocities for " + std::to_string(positions.size()) +
+                           " particles");
+    if (velocities)
+        for (size_t i = 0; i < velocities->size(); ++i)
+            if (!(*velocities)[i].allFinite())
+                throw SurfaceError("particle " + std::to_string(i) + " has a non-finite velocity");
     initOpenVdb();
     for (size_t i = 0; i < positions.size(); ++i)
         if (!positions[i].allFinite())
@@ -399,6 +431,7 @@ TriangleMesh extractSurface(const std::vector<Vec3>& positions, const SurfacePar
     st.estimatedVoxels = grid.voxels;
 
     TriangleMesh mesh;
+    std::vector<DensityKernel> kernels; // the density's kernels, kept for the velocity
     if (!positions.empty()) {
         std::vector<openvdb::Vec3s> points;
         std::vector<openvdb::Vec3I> tris;
@@ -422,7 +455,7 @@ TriangleMesh extractSurface(const std::vector<Vec3>& positions, const SurfacePar
                 iso = cal.offset;
             }
         } else {
-            const std::vector<DensityKernel> kernels = buildKernels(positions, params, spacing);
+            kernels = buildKernels(positions, params, spacing);
             st.kernelSeconds = seconds(t0);
             t0 = tbb::tick_count::now();
             grid = rasterize(kernels, voxel);
@@ -488,7 +521,21 @@ TriangleMesh extractSurface(const std::vector<Vec3>& positions, const SurfacePar
     }
     st.particles = positions.size();
     st.emptyFromParticles = !positions.empty() && mesh.empty();
-    if (!vdbPath.empty()) writeLevelSet(vdbPath, mesh, voxel);
+    std::function<std::vector<Vec3>(const std::vector<Vec3>&)> velocityAt;
+    if (velocities && !positions.empty()) {
+        // The OpenVDB method rasterizes spheres, not kernels: its velocity takes round
+        // kernels of the same support.
+        if (kernels.empty()) {
+            SurfaceParams round = params;
+            round.method = SurfaceMethod::Isotropic;
+            kernels = buildKernels(positions, round, spacing);
+        }
+        velocityAt = [&](const std::vector<Vec3>& at) { return interpolateVelocities(kernels, *velocities, at); };
+        const auto t0 = tbb::tick_count::now();
+        mesh.velocities = velocityAt(mesh.vertices);
+        st.velocitySeconds = seconds(t0);
+    }
+    if (!vdbPath.empty()) writeLevelSet(vdbPath, mesh, voxel, velocityAt);
     return mesh;
 }
 

@@ -54,6 +54,7 @@ struct SurfaceStats {
     size_t leaves = 0, activeVoxels = 0;
     double estimatedVoxels = 0;       ///< estimateGrid's voxels (the memory check's)
     double kernelSeconds = 0, rasterSeconds = 0, meshSeconds = 0;
+    double velocitySeconds = 0;       ///< the vertex velocities' interpolation
     size_t particles = 0;             ///< particles meshed
     bool emptyFromParticles = false;  ///< particles were given but the mesh is empty
 };
@@ -61,12 +62,14 @@ struct SurfaceStats {
 /// Meshes the fluid described by `positions` [m]. `spacing` > 0 is the particle spacing
 /// (0 = params.spacing, else estimated). Empty input gives an empty mesh; a single particle
 /// a small closed blob. If `vdbPath` is not empty, the surface is also written there as a
-/// narrow-band level set (OpenVDB .vdb, grid "surface", atomically).
+/// narrow-band level set (OpenVDB .vdb, grid "surface", atomically). With `velocities` (one
+/// per particle [m/s]) the mesh gets vertex velocities and the .vdb a grid "v" on the band's
+/// voxels, both interpolated with the surface's own kernels (VertexVelocity.hpp).
 /// Throws SurfaceError for bad positions, for a grid (estimateGrid) larger than the
 /// machine's available memory, MeshFileError when the .vdb cannot be written.
 TriangleMesh extractSurface(const std::vector<Vec3>& positions, const SurfaceParams& params,
                             double spacing = 0, const std::string& vdbPath = {},
-                            SurfaceStats* stats = nullptr);
+                            SurfaceStats* stats = nullptr, const std::vector<Vec3>* velocities = nullptr);
 
 /// The density field of the kernels sampled into a sparse grid and meshed, without the
 /// kernel step (for tests of the rasterizer against densityAt). Returns the sum of all

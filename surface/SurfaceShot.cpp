@@ -28,11 +28,13 @@ SurfaceStats meshParticleFile(const std::string& inPath, const std::string& outP
     refuseToOverwriteInputs("--vdb", vdbPath, {inPath, outPath});
     requireReadable(inPath);
     ParticleTable table;
-    std::vector<Vec3> x;
+    std::vector<Vec3> x, v;
     double spacing = 0;
     try {
         table = readParticleFile(inPath);
         x = table.vec3("x", "y", "z");
+        // The mesh carries the fluid's motion when the file has it (every ferro-sim file does).
+        if (table.column("vx") >= 0 && table.column("vy") >= 0 && table.column("vz") >= 0) v = table.vec3("vx", "vy", "vz");
         spacing = table.commentNumber("spacing", 0.0);
     } catch (const ParticleFileError& e) {
         const std::string what = e.what();
@@ -45,7 +47,7 @@ SurfaceStats meshParticleFile(const std::string& inPath, const std::string& outP
     SurfaceStats stats;
     TriangleMesh mesh;
     try {
-        mesh = extractSurface(x, params, spacing, vdbPath, &stats);
+        mesh = extractSurface(x, params, spacing, vdbPath, &stats, v.empty() ? nullptr : &v);
     } catch (const SurfaceError& e) {
         throw SurfaceRunError(kExitBadInput, inPath + ": " + e.what());
     }

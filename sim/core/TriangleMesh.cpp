@@ -76,6 +76,10 @@ void writePly(const std::string& path, const TriangleMesh& mesh) {
     if (withNormals && mesh.normals.size() != mesh.vertices.size())
         fail(path, std::to_string(mesh.normals.size()) + " normals for " +
                        std::to_string(mesh.vertices.size()) + " vertices");
+    const bool withVelocities = !mesh.velocities.empty();
+    if (withVelocities && mesh.velocities.size() != mesh.vertices.size())
+        fail(path, std::to_string(mesh.velocities.size()) + " velocities for " +
+                       std::to_string(mesh.vertices.size()) + " vertices");
     std::string header;
     try {
         header = binaryPlyHeaderStart(mesh.comments);
@@ -85,16 +89,20 @@ void writePly(const std::string& path, const TriangleMesh& mesh) {
     header += "element vertex " + std::to_string(mesh.vertices.size()) + "\n";
     header += "property float x\nproperty float y\nproperty float z\n";
     if (withNormals) header += "property float nx\nproperty float ny\nproperty float nz\n";
+    if (withVelocities) header += "property float vx\nproperty float vy\nproperty float vz\n";
     header += "element face " + std::to_string(mesh.triangles.size()) + "\n";
     header += "property list uchar uint vertex_indices\nend_header\n";
 
-    const size_t stride = withNormals ? 6 : 3;
+    const size_t velocityAt = withNormals ? 6 : 3;
+    const size_t stride = velocityAt + (withVelocities ? 3 : 0);
     std::vector<float> vertexData(mesh.vertices.size() * stride);
     for (size_t i = 0; i < mesh.vertices.size(); ++i) {
         float* row = &vertexData[i * stride];
         for (int k = 0; k < 3; ++k) row[k] = mesh.vertices[i][k];
         if (withNormals)
             for (int k = 0; k < 3; ++k) row[3 + k] = mesh.normals[i][k];
+        if (withVelocities)
+            for (int k = 0; k < 3; ++k) row[velocityAt + size_t(k)] = mesh.velocities[i][k];
     }
     constexpr size_t faceBytes = 1 + 3 * sizeof(uint32_t);
     std::vector<unsigned char> faceData(mesh.triangles.size() * faceBytes);
@@ -216,7 +224,7 @@ bool readOwnPly(const std::string& path, const PlyHeader& h, std::istream& in, T
     const auto& ve = h.elements[0];
     const auto& fe = h.elements[1];
     if (ve.name != "vertex" || fe.name != "face") return false;
-    int ix = -1, iy = -1, iz = -1, inx = -1, iny = -1, inz = -1;
+    int ix = -1, iy = -1, iz = -1, inx = -1, iny = -1, inz = -1, ivx = -1, ivy = -1, ivz = -1;
     for (size_t i = 0; i < ve.properties.size(); ++i) {
         const PlyProperty& p = ve.properties[i];
         if (p.isList || p.type != PlyScalar::Float32) return false;
@@ -227,6 +235,9 @@ bool readOwnPly(const std::string& path, const PlyHeader& h, std::istream& in, T
         else if (p.name == "nx") inx = k;
         else if (p.name == "ny") iny = k;
         else if (p.name == "nz") inz = k;
+        else if (p.name == "vx") ivx = k;
+        else if (p.name == "vy") ivy = k;
+        else if (p.name == "vz") ivz = k;
     }
     if (ix < 0 || iy < 0 || iz < 0) return false;
     if (fe.properties.size() != 1) return false;
@@ -250,12 +261,15 @@ bool readOwnPly(const std::string& path, const PlyHeader& h, std::istream& in, T
     if (static_cast<size_t>(in.gcount()) != rows.size() * sizeof(float))
         fail(path, "truncated (expected " + std::to_string(ve.count) + " vertices)");
     const bool normals = inx >= 0 && iny >= 0 && inz >= 0;
+    const bool velocities = ivx >= 0 && ivy >= 0 && ivz >= 0;
     mesh.vertices.resize(nv);
     if (normals) mesh.normals.resize(nv);
+    if (velocities) mesh.velocities.resize(nv);
     for (size_t i = 0; i < nv; ++i) {
         const float* r = &rows[i * cols];
         mesh.vertices[i] = Vec3(r[ix], r[iy], r[iz]);
         if (normals) mesh.normals[i] = Vec3(r[inx], r[iny], r[inz]);
+        if (velocities) mesh.velocities[i] = Vec3(r[ivx], r[ivy], r[ivz]);
     }
 
     const uint64_t rest = available - nv * cols * sizeof(float);

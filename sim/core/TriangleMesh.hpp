@@ -30,6 +30,9 @@ public:
 struct TriangleMesh {
     std::vector<Vec3> vertices;                      ///< positions [m]
     std::vector<Vec3> normals;                       ///< unit outward normal per vertex; empty = none
+    /// Velocity per vertex [m/s] (the fluid's motion, for motion blur and retiming); empty =
+    /// none. PLY carries it as the vertex properties vx, vy, vz; other formats drop it.
+    std::vector<Vec3> velocities;
     std::vector<std::array<uint32_t, 3>> triangles;  ///< counter-clockwise seen from outside
     /// `comment key value` metadata carried from stage to stage (frame, time, magnets).
     std::vector<std::pair<std::string, std::string>> comments;

@@ -142,6 +142,21 @@ TEST_CASE("binary PLY round trip keeps vertices, normals, triangles and comments
     CHECK(rb.normals.empty());
     CHECK(rb.triangles == bare.triangles);
 
+    // Velocities (vx, vy, vz) round-trip with and without normals; a count that does not
+    // match the vertices is refused.
+    for (bool withNormals : {true, false}) {
+        TriangleMesh mv = boxMesh(Vec3(0, 0, 0), Vec3(1, 1, 1));
+        if (withNormals) computeVertexNormals(mv);
+        for (size_t i = 0; i < mv.vertices.size(); ++i) mv.velocities.push_back(Vec3(Real(i), -0.5f, Real(2 * i) + 0.25f));
+        writeMesh((dir / "moving.ply").string(), mv);
+        const TriangleMesh rv = readMesh((dir / "moving.ply").string());
+        CHECK(rv.velocities == mv.velocities);
+        CHECK(rv.normals == mv.normals);
+        CHECK(rv.vertices == mv.vertices);
+        mv.velocities.pop_back();
+        CHECK_THROWS_AS(writeMesh((dir / "bad.ply").string(), mv), MeshFileError);
+    }
+
     // An empty mesh is a valid file.
     writeMesh((dir / "empty.ply").string(), TriangleMesh{});
     CHECK(readMesh((dir / "empty.ply").string()).empty());
