@@ -3,7 +3,7 @@
 # libclang-rt-dev build the libFuzzer targets of tests/fuzz, which the test suite runs briefly
 # (libFuzzer's library is only a recommend of clang, and recommends are not installed).
 # Idempotent: installs nothing when everything is present.
-# Usage: install-deps.sh [--with-video] [--with-bench] [--with-slurm]
+# Usage: install-deps.sh [--with-video] [--with-bench] [--with-slurm] [--with-blender]
 # As root it runs apt-get;
 # otherwise it prints the exact apt-get line to run and exits 1.
 set -euo pipefail
@@ -22,12 +22,15 @@ PACKAGES=(
 # --with-slurm: also Slurm (slurm-wlm: slurmctld, slurmd and the client commands) and munge,
 # for submitting shots (scripts/shot.sh --slurm) and for the suite's one-node cluster
 # (scripts/slurm/local-cluster.sh, tests/slurm); the test command installs them.
+# --with-blender: also Blender 3.4, for importing shots (scripts/blender/import_shot.py) and
+# for the suite's headless import and render test (tests/blender); the test command installs it.
 for arg in "$@"; do
   case "$arg" in
     --with-video) PACKAGES+=(ffmpeg) ;;
     --with-bench) PACKAGES+=(gnuplot-nox) ;;
     --with-slurm) PACKAGES+=(slurm-wlm munge python3) ;;
-    *) echo "install-deps: error: unknown option $arg (--with-video, --with-bench, --with-slurm)" >&2; exit 2 ;;
+    --with-blender) PACKAGES+=(blender python3) ;;
+    *) echo "install-deps: error: unknown option $arg (--with-video, --with-bench, --with-slurm, --with-blender)" >&2; exit 2 ;;
   esac
 done
 
