@@ -1,6 +1,7 @@
 // Sparse anisotropic-kernel rasterizer on OpenVDB and mesh extraction (see SurfaceExtractor.hpp).
 #include "surface/SurfaceExtractor.hpp"
 #include "surface/VertexVelocity.hpp"
+#include "surface/OpenVdbParticles.hpp"
 
 #include "surface/DensityKernels.hpp"
 
@@ -245,18 +246,6 @@ FloatGrid::Ptr rasterize(const std::vector<DensityKernel>& kernels, double voxel
     return grid;
 }
 
-/// OpenVDB's own particle rasterizer wants this interface.
-struct ParticleList {
-    using PosType = openvdb::Vec3R;
-    const std::vector<Vec3>& x;
-    double radius;
-    size_t size() const { return x.size(); }
-    void getPos(size_t n, openvdb::Vec3R& p) const { p = openvdb::Vec3R(x[n].x(), x[n].y(), x[n].z()); }
-    void getPosRad(size_t n, openvdb::Vec3R& p, openvdb::Real& r) const {
-        getPos(n, p);
-        r = radius;
-    }
-};
 
 /// Quads split along the shorter diagonal, all polygons oriented outward (counter-clockwise
 /// seen from outside). volumeToMesh's polygons of a level set (inside below the iso value)

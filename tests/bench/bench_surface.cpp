@@ -5,6 +5,7 @@
 //   build-surface/bin/bench-surface [--threads N] [--small-only]
 #include "tests/surface/SurfaceTestShapes.hpp"
 
+#include "surface/OpenVdbParticles.hpp"
 #include "surface/SurfaceExtractor.hpp"
 
 #include <openvdb/openvdb.h>
@@ -23,17 +24,6 @@ using namespace ferro;
 
 namespace {
 
-struct Particles {
-    using PosType = openvdb::Vec3R;
-    const std::vector<Vec3>& x;
-    double radius;
-    size_t size() const { return x.size(); }
-    void getPos(size_t n, openvdb::Vec3R& p) const { p = openvdb::Vec3R(x[n].x(), x[n].y(), x[n].z()); }
-    void getPosRad(size_t n, openvdb::Vec3R& p, openvdb::Real& r) const {
-        getPos(n, p);
-        r = radius;
-    }
-};
 
 double best(int repeats, const std::function<void()>& f) {
     double t = 1e30;
@@ -83,7 +73,7 @@ int main(int argc, char** argv) {
             const double t = best(repeats, [&] {
                 auto grid = openvdb::createLevelSet<openvdb::FloatGrid>(voxel, 3.0);
                 openvdb::tools::ParticlesToLevelSet<openvdb::FloatGrid> raster(*grid);
-                raster.rasterizeSpheres(Particles{x, spacing});
+                raster.rasterizeSpheres(ParticleList{x, spacing});
                 raster.finalize(true);
                 std::vector<openvdb::Vec3s> points;
                 std::vector<openvdb::Vec3I> t3;
