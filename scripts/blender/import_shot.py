@@ -152,8 +152,8 @@ def fluid_material():
     bsdf = mat.node_tree.nodes.get("Principled BSDF")
     if bsdf:
         bsdf.inputs["Base Color"].default_value = (0.005, 0.005, 0.006, 1.0)
-        bsdf.inputs["Roughness"].default_value = 0.08
-        bsdf.inputs["Specular"].default_value = 0.6
+        bsdf.inputs["Roughness"].default_value = 0.05
+        bsdf.inputs["Specular"].default_value = 0.5
     return mat
 
 
@@ -193,6 +193,7 @@ def main(argv):
     scene.cycles.device = "CPU"
     scene.cycles.samples = samples
     scene.cycles.use_denoising = False  # Debian's build has no OpenImageDenoise
+    scene.view_settings.view_transform = "Standard"  # as POV-Ray's PNGs: no filmic lift of the black fluid
     scene.render.use_motion_blur = True
     scene.render.motion_blur_shutter = 0.5
     fps = pov_number(pov, "FerroFps")
@@ -230,7 +231,8 @@ def main(argv):
     from mathutils import Vector
     cam_obj.rotation_euler = (Vector(target) - Vector(location)).to_track_quat("-Z", "Y").to_euler()
     scene.camera = cam_obj
-    # Light: a soft key from above and the world's dim grey, so the black fluid shows its shape.
+    # Light: a soft key from above and a bright backdrop (as look.inc's white studio), whose
+    # reflections show the black fluid's shape.
     light = bpy.data.lights.new("FerroKey", "AREA")
     light.energy = 20.0
     light.size = 0.3
@@ -239,7 +241,7 @@ def main(argv):
     scene.collection.objects.link(light_obj)
     world = bpy.data.worlds.new("FerroWorld")
     world.use_nodes = True
-    world.node_tree.nodes["Background"].inputs["Color"].default_value = (0.6, 0.6, 0.62, 1.0)
+    world.node_tree.nodes["Background"].inputs["Color"].default_value = (0.8, 0.8, 0.82, 1.0)
     scene.world = world
 
     # The frame-change handler, in this session and as a registered text block of the .blend.
