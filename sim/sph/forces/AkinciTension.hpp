@@ -41,7 +41,6 @@ public:
 
     /// The surface normals of this sweep's positions.
     void prepare(const PairForceView& s) {
-        rho_ = &s.rho;
         const size_t n = s.x.size();
         normal_.resize(n);
 #if defined(__SSE2__)
@@ -113,7 +112,6 @@ private:
     CohesionKernel4 cohesion4_{cohesion_};
 #endif
     double stepLimit_ = 1e30;
-    const std::vector<Real>* rho_ = nullptr;
     std::vector<Vec3> normal_;
 };
 
