@@ -1,6 +1,6 @@
 // Surface tension: a free blob pulls itself into a sphere, and its interior pressure grows
 // with the surface tension coefficient as the Laplace pressure 2 sigma / R (checked on a
-// droplet of 8 spacings: kSurfaceTensionCalibration in FluidSimulation.cpp was fitted on one
+// droplet of 8 spacings: AkinciTension::kCalibration (sim/sph/forces/AkinciTension.hpp) was fitted on one
 // of 11); and, independent of that fit, a droplet's l = 2 shape oscillation against
 // Rayleigh's (1879) frequency omega_2^2 = 8 sigma / (rho R^3).
 #include "sim/sph/FluidSimulation.hpp"
@@ -58,7 +58,7 @@ Droplet relaxDroplet(double sigma, double cylinderRadius) {
 
 } // namespace
 
-// KNOWN FAILURE (measured 2026-12, Akinci 2013 tension with kSurfaceTensionCalibration):
+// KNOWN FAILURE (measured 2026-12, Akinci 2013 tension with AkinciTension::kCalibration):
 // the interior pressure's slope d p / d sigma does not follow 2 / R. It is ~175 /m whatever
 // the radius: 175 at R = 5.9 spacings (2/R = 382), 166 at 8.0 (268), passes at 11.4 (175),
 // 184 at 14.8 (139). The cohesion term compresses the whole droplet by an amount set by the
