@@ -161,8 +161,6 @@ MagnetizationSolver::Stats MagnetizationSolver::solve(const std::vector<Vec3>& x
     if (magnets.empty() || n == 0 || !params_.enabled()) {
         stats.skipped = true;
         lastSolver_ = Solver::External;
-        surfaceWeight_.clear();
-        surfaceNormal_.clear();
         if (magnets.empty() || n == 0) {
             std::fill(H.begin(), H.end(), Vec3::Zero());
         } else { // non-magnetic fluid: the field is the magnets' alone
@@ -270,16 +268,6 @@ MagnetizationSolver::Stats MagnetizationSolver::solve(const std::vector<Vec3>& x
     }
     (void)extNorm;
     lastSolver_ = stats.solver;
-    surfaceWeight_.clear();
-    surfaceNormal_.clear();
-    if (stats.solver != Solver::External) {
-        surfaceWeight_.assign(n, Real(0));
-        surfaceNormal_.assign(n, Vec3::Zero());
-        for (size_t k = 0; k < n; ++k) {
-            surfaceWeight_[order[k]] = tree.surfaceWeight(k);
-            surfaceNormal_[order[k]] = tree.surfaceNormal(k);
-        }
-    }
 
     // Back to the caller's order, float.
     tbb::parallel_for(tbb::blocked_range<size_t>(0, n, 4096), [&](const tbb::blocked_range<size_t>& r) {

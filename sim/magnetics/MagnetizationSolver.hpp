@@ -109,13 +109,6 @@ public:
                        const std::vector<Magnet>& magnets, const std::vector<Vec3>& M,
                        std::vector<Eigen::Matrix3f>& J) const;
 
-    /// The free surface as the last self-consistent solve saw it, in solve()'s input order:
-    /// per particle the weight w in [0, 1) of its surface term (0 inside the fluid, ~1/2 in
-    /// a flat surface's top layer) and the outward normal. Empty after External or skipped
-    /// solves and for the sphere model.
-    const std::vector<Real>& surfaceWeight() const { return surfaceWeight_; }
-    const std::vector<Vec3>& surfaceNormal() const { return surfaceNormal_; }
-
     const MagnetizationParams& params() const { return params_; }
     /// Auto uses Direct up to this many particles (where all pairs are cheaper than a tree).
     static constexpr size_t directLimit() { return 3000; }
@@ -129,8 +122,6 @@ private:
                                    std::vector<Eigen::Matrix3f>& J);
     MagnetizationParams params_;
     std::optional<Solver> lastSolver_; // what the last solve() ran (Auto's pick)
-    std::vector<Real> surfaceWeight_;  // see surfaceWeight()
-    std::vector<Vec3> surfaceNormal_;
 };
 
 } // namespace ferro

@@ -74,14 +74,6 @@ public:
     /// Field at sorted particle k alone: exact sum over all particles, or the tree's value
     /// (the same number fieldAtParticles(H, true) gives for k). For error estimates.
     Eigen::Vector3d fieldAtParticleDirect(size_t k) const;
-    /// Surface sampling term's weight w = max(0, 1 - n_k) of sorted particle k (0 inside the
-    /// fluid, about 1/2 in the top layer of a flat surface; 0 for the sphere model) and its
-    /// outward normal (zero where w = 0).
-    float surfaceWeight(size_t k) const { return surfaceWeight_.empty() ? 0.0f : surfaceWeight_[k]; }
-    Eigen::Vector3f surfaceNormal(size_t k) const {
-        return surfaceNormal_.empty() ? Eigen::Vector3f::Zero()
-                                      : Eigen::Vector3f(surfaceNormal_[3 * k], surfaceNormal_[3 * k + 1], surfaceNormal_[3 * k + 2]);
-    }
     Eigen::Vector3d fieldAtParticleTree(size_t k) const;
 
     /// Local consistency correction (smoothed model only; see the file comment): measures
