@@ -239,14 +239,10 @@ namespace {
 std::vector<Vec3> surfaceVelocityAt(const TriangleMesh& surface, const std::vector<Vec3>& points)
 {
     if (surface.velocities.empty() || surface.velocities.size() != surface.vertices.size()) return {};
-    double edge = 0;
-    size_t edges = 0;
-    for (const auto& t : surface.triangles)
-        for (int k = 0; k < 3; ++k, ++edges)
-            edge += (surface.vertices[t[size_t(k)]] - surface.vertices[t[size_t((k + 1) % 3)]]).cast<double>().norm();
+    const double edge = meanEdgeLength(surface);
     std::vector<Vec3d> vertices(surface.vertices.size());
     for (size_t i = 0; i < vertices.size(); ++i) vertices[i] = surface.vertices[i].cast<double>();
-    const HashGrid grid(vertices, edges ? std::max(2 * edge / double(edges), 1e-9) : 1e-3);
+    const HashGrid grid(vertices, edge > 0 ? std::max(2 * edge, 1e-9) : 1e-3);
     std::vector<Vec3> out(points.size());
     for (size_t i = 0; i < points.size(); ++i) out[i] = surface.velocities[grid.nearest(points[i].cast<double>())];
     return out;

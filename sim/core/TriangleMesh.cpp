@@ -98,6 +98,17 @@ TriangleMesh readMesh(const std::string& path) {
     return mesh;
 }
 
+double meanEdgeLength(const TriangleMesh& mesh) {
+    double sum = 0;
+    size_t n = 0;
+    for (const auto& t : mesh.triangles)
+        for (int k = 0; k < 3; ++k) {
+            sum += (mesh.vertices[t[size_t(k)]] - mesh.vertices[t[size_t((k + 1) % 3)]]).cast<double>().norm();
+            ++n;
+        }
+    return n ? sum / double(n) : 0.0;
+}
+
 double enclosedVolume(const TriangleMesh& mesh) {
     if (mesh.triangles.empty()) return 0.0;
     // Tetrahedra against a point near the mesh rather than the origin: the sum of large

@@ -47,6 +47,9 @@ void writeMesh(const std::string& path, const TriangleMesh& mesh, const std::str
 /// Throws MeshFileError with a one-line reason.
 TriangleMesh readMesh(const std::string& path);
 
+/// Mean length [m] of the triangles' edges (each shared edge counted once a triangle); 0
+/// without triangles.
+double meanEdgeLength(const TriangleMesh& mesh);
 /// Signed enclosed volume [m^3] (divergence theorem); positive for an outward-oriented closed mesh.
 double enclosedVolume(const TriangleMesh& mesh);
 /// Area-weighted unit vertex normals from the triangles (outward for counter-clockwise

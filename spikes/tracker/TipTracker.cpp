@@ -12,27 +12,12 @@
 
 namespace ferro {
 
-namespace {
-
-double meanEdge(const TriangleMesh& m) {
-    double sum = 0;
-    size_t n = 0;
-    for (const auto& t : m.triangles)
-        for (int k = 0; k < 3; ++k) {
-            sum += (m.vertices[t[size_t(k)]] - m.vertices[t[size_t((k + 1) % 3)]]).cast<double>().norm();
-            ++n;
-        }
-    return n ? sum / double(n) : 0.0;
-}
-
-} // namespace
-
 std::vector<SpikeTipSample> findTips(const TriangleMesh& spiky, const TriangleMesh& surface,
                                      const TipFinderParams& params) {
     std::vector<SpikeTipSample> tips;
     if (spiky.empty() || surface.empty()) return tips;
     const std::vector<Vec3d> normals = areaWeightedNormals(surface);
-    const double edge = meanEdge(surface);
+    const double edge = meanEdgeLength(surface);
     std::vector<Vec3d> surfacePoints(surface.vertices.size());
     for (size_t i = 0; i < surfacePoints.size(); ++i) surfacePoints[i] = surface.vertices[i].cast<double>();
     const HashGrid near(surfacePoints, std::max(2 * edge, 1e-9));
