@@ -190,8 +190,7 @@ ViscosityOperatorInput FluidSimulation::viscosityOperator() const {
     in.particleMass = mass_;
     in.restDensity = rho0_;
     in.viscosity = viscosity_;
-    // As in the explicit sweep: the walls' friction scales the physical viscosity only.
-    in.wallViscosity = scene_.fluid.viscosity * scene_.container.wallFriction;
+    in.wallViscosity = wallViscosity();
     return in;
 }
 
@@ -221,6 +220,7 @@ void FluidSimulation::setUpPairForces() {
     setup.restDensity = rho0_;
     setup.volume = volume_;
     setup.viscosity = viscosity_;
+    setup.wallViscosity = wallViscosity();
     pairForces_ = makePairForces(setup);
 }
 

@@ -198,6 +198,9 @@ private:
     void sampleBoundary();
     void chooseSpeedScales();
     void setUpPairForces();
+    /// The walls' friction viscosity [m^2/s], for the explicit sweep and the implicit solve
+    /// alike: container.wall_friction scales the physical viscosity only (not the artificial).
+    double wallViscosity() const { return scene_.fluid.viscosity * scene_.container.wallFriction; }
     /// fluid.viscosity_method: "auto" takes the implicit solve when the explicit viscous
     /// limit would be shorter than the step the scene takes otherwise.
     void chooseViscosityMethod();

@@ -36,6 +36,7 @@ struct PairForceSetup {
     double restDensity = 0;  ///< rho0 [kg/m^3]
     double volume = 0;       ///< particle volume V = m / rho0 [m^3]
     double viscosity = 0;    ///< kinematic viscosity the sweep applies, physical plus artificial [m^2/s]
+    double wallViscosity = 0;///< the walls' friction viscosity [m^2/s] (FluidSimulation::wallViscosity)
 };
 
 /// The particles as one sweep sees them (sorted order).

@@ -17,7 +17,7 @@ public:
     static constexpr double kExplicitStep = 0.02;
 
     explicit StandardViscosity(const PairForceSetup& s)
-        : nu_(Real(s.viscosity)), nuWall_(Real(s.scene->fluid.viscosity * s.scene->container.wallFriction)),
+        : nu_(Real(s.viscosity)), nuWall_(Real(s.wallViscosity)),
           eps2_(Real(0.01 * s.support * s.support)), V_(Real(s.volume)), rho0_(Real(s.restDensity)),
           stepLimit_(s.viscosity > 0 ? kExplicitStep * s.support * s.support / s.viscosity : 1e30) {}
 
