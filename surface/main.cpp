@@ -45,7 +45,7 @@ int main(int argc, char** argv) {
     app.add_option("--smoothing", smoothing, "Gaussian smoothing passes over the density (default 0)")
         ->check(CLI::Range(0, 100));
     app.add_option("--format", format, "mesh format: ply (default), obj, stl, ... (any assimp export id)");
-    app.add_option("--vdb", run.vdb, "also write the level set as an OpenVDB .vdb file (a pattern for --frames)");
+    app.add_option("--vdb", run.vdb, "also write the level set (grid surface) and, when the particle file has velocities, the fluid velocity (grid v) as an OpenVDB .vdb file (a pattern for --frames)");
     addThreadsOption(app, threads, "worker threads (default 0 = all cores)");
     app.add_flag("--quiet,-q", run.quiet, "no progress lines");
     const std::vector<ErrorExit> errors = {
