@@ -61,22 +61,17 @@ struct SolverParams {
     double maxDt = 0.001;             ///< upper bound of the time step [s]
     double minDt = 1e-7;              ///< lower bound; a smaller step aborts the run [s]
     double soundSpeed = 0.0;          ///< WCSPH speed of sound [m/s]; 0 = 10x the largest expected speed
-    /// DFSPH: mean relative density error tolerance (0.02 %). Measured on a pool over a
-    /// still magnet (2,560 particles) and the resting tank of examples/hydrostatic.toml:
-    /// 0.1 % kept 1.8 mm/s of jitter in the pool for good (tank pressure slope -6 %); 0.02 %
-    /// brings it to rest (0.6 mm/s at 1.5 s; slope +3 %) for ~1.4x the step cost; 0.01 %
-    /// (SPlisHSPlasH's default) left the stored pressure of the tank 33 % low (not analysed
-    /// yet) for ~3x the step cost at rest.
+    /// DFSPH: mean relative density error tolerance (0.02 %): a looser one left a pool over a
+    /// still magnet jittering. Measurements: docs/physics/sph-solver.md, "Density tolerance".
     double maxDensityError = 0.0002;
     double maxDivergenceError = 0.001;///< DFSPH: mean relative density change per step left by the divergence solve (0.1 %)
     int maxIterations = 100;          ///< DFSPH: iteration cap of each solve
     /// DFSPH: how the density solve iterates (`sim.pressure_iteration`). Jacobi (default):
-    /// SPlisHSPlasH's relaxed Jacobi, warm-started from half the last pressure. CG: conjugate
-    /// gradients on the same system (it is symmetric: the pressure force is the adjoint of
-    /// the density change, walls included), then Jacobi sweeps to the tolerance: its
-    /// sweeps do not grow with the square of the fluid's depth in spacings as Jacobi's do
-    /// (examples/annotated.toml has the measurements). Experimental: for settled pools, not
-    /// for splashing flows.
+    /// SPlisHSPlasH's relaxed Jacobi, warm-started from 0.8 of the last pressure where the
+    /// step compresses. CG: conjugate gradients on the same system (it is symmetric), then
+    /// Jacobi sweeps to the tolerance; its sweeps do not grow with the square of the fluid's
+    /// depth as Jacobi's do. Experimental: for settled pools, not for splashing flows.
+    /// Measurements: docs/physics/sph-solver.md, "Conjugate gradients for the density solve".
     enum class PressureIteration { Jacobi, ConjugateGradient };
     PressureIteration pressureIteration = PressureIteration::Jacobi;
     /// Artificial viscosity alpha, dimensionless: adds alpha * h * U to the kinematic

@@ -284,17 +284,11 @@ void DfsphSolver::solveDensity(double dt) {
         const Real predicted = rho[i] / rho0 + Real(dt) * sim_.divergence(i, v);
         source_[i] = 1 - predicted;
         // Warm start from 0.8 of the previous step's pressure where the step compresses
-        // (SPlisHSPlasH: 0.5). The solve, stopped at its tolerance, must end below the
-        // right pressure: what it leaves is then compression, which the next step's source
-        // corrects, where too much pressure does work that pumps the fluid. A start from
-        // half rebuilds the other half with smooth (slow, for Jacobi) sweeps; from 0.8 the
-        // start stays below and a fifth is left to rebuild. Measured (issue 29): bench-sim's
-        // dam break 25.3 instead of 50.7 sweeps a step at the same measured compression
-        // (0.0249 %), 1.64x less wall time; the resting tank of examples/hydrostatic.toml
-        // 13 instead of 36, 0.47 mm/s mean after 2 s (0.37 from half); from 0.9 the tank
-        // pumps (2.0 mm/s), from the full pressure 4.1. Starting from the pressure, which
-        // every frame file stores, rather than from a private solver array keeps resumed
-        // runs identical.
+        // (SPlisHSPlasH: 0.5): the solve, stopped at its tolerance, must end below the right
+        // pressure (what it leaves is compression the next step corrects; too much pressure
+        // pumps the fluid), and from 0.8 only a fifth is left to rebuild. From the pressure
+        // every frame file stores, so resumed runs stay identical. Measurements:
+        // docs/physics/sph-solver.md, "The density solve's warm start".
         kappa_[i] = predicted > 1 ? Real(kDensityWarmStart) * std::min(p[i] * rho0 / (rho[i] * rho[i]), Real(0.00025) / h2) : 0;
     });
     const SolverParams& sp = sim_.scene().solver;

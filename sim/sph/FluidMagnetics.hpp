@@ -1,73 +1,27 @@
 #pragma once
 // The magnetic part of a ferro-sim step: the magnets at the current time, the fluid's
-// magnetization (paper eq. 5 with Langevin saturation) and the Kelvin body force
-// mu0 (M . grad) H (paper eqs. 9-11).
-//
-// What it models, and what it leaves out on purpose:
-// - The field at a particle is H = H_magnets(x) + H_induced, the induced part being the
-//   field of every other magnetized particle. H_magnets is analytic and re-evaluated every
-//   step (O(N) per magnet); H_induced needs the O(N^2) / O(N log N) self-consistent solve of
-//   MagnetizationSolver, and changes far more slowly than the SPH step, so it is cached and
-//   re-solved only when it has drifted enough to matter: each solve measures how far the
-//   cached field had drifted, as the error it put into the Kelvin acceleration relative to
-//   the accelerations driving the fluid (gravity, the Kelvin force itself), and sets the
-//   next interval so that error stays under magnetization.tolerance (or every
-//   magnetization.resolve_every steps). A fast change of the magnets re-solves at once.
-//   Between solves M follows the Langevin law locally from the current total field.
-// - The force, magnetization.force = "body" (the default): mu0 (J_magnets M) / rho0 per
-//   unit mass, J_magnets the magnets' analytic Jacobian (the particles' own field only
-//   lowers M, demagnetization). Per unit mass with the rest volume m / rho0, not the SPH
-//   density, whose deficit at the free surface would inflate the force there. With the
-//   `external` solver this is exactly mu0 grad F(H_magnets) / rho0, F(H) = integral_0^H M dH'
-//   (langevinEnergy), and a pool at rest obeys rho g dz_s = mu0 dF along its surface
-//   (tests/sim/sph: within 5 % of the centre rise, DFSPH and WCSPH). With a self-consistent
-//   solver M in the force is the solve's DemagnetizationCurve, M_f(|H_magnets|): the
-//   demagnetized M as a function of the applied field's strength, so the force stays the
-//   gradient mu0 grad G(|H_magnets|) / rho0 and a pool can rest (each particle's own M made
-//   it a curl force that stirred the pool forever: DemagnetizationCurve.hpp). The curve is
-//   fitted so that G along the surface is the ferrohydrostatic surface pressure
-//   F(H) + M_n^2 / 2 (normal traction included), so that a resting surface obeys the
-//   Bernoulli law rho g z_s = mu0 (F(H) + M_n^2 / 2) + C; magnetization.curve_fit says
-//   which samples: "free_surface" (default) half a spacing outside the free-surface
-//   particles (colour gradient and exposure, as the surface model finds them:
-//   surfaceSamples()), each fit leaning on the last (kCurveMemory): resting pools 4.4 % and
-//   4.5 % off the law (chi0 0.5, 1.5) on 10,240 particles, 9.5 % and 5.6-32 % on 2,560
-//   (tests/sim/sph/test_FluidMagnetics.cpp); "boundary" (the default until 2026-12-02) the
-//   solve's own surface weights, at rest the floor and walls (13 % at chi0 0.5, 39-44 % at
-//   1.5, heaps too tall).
-// - magnetization.force = "surface" (experimental): the Kelvin force density of the TOTAL
-//   field, mu0 (M . grad) H, is for M parallel to H and curl H = 0 exactly grad(mu0 F(H))
-//   (Rosensweig, Ferrohydrodynamics, ch. 5); across the free surface the same density,
-//   acting on the jump of the normal field, integrates to the normal traction, which pulls
-//   the surface outward. In an incompressible fluid a gradient force only changes the
-//   pressure, so both together are one pressure condition on the free surface,
-//       p_s = C - mu0 (F(H) + M_n^2 / 2)           (the ferrohydrostatic Bernoulli law),
-//   H and M_n taken half a spacing outside the surface particle's centre, where the fluid
-//   it stands for ends. That is applied as a push p_s w_i grad c_i / (rho0 kappa) per unit
-//   mass on surface particles, no body force inside: grad c_i = V sum_j grad W_ij +
-//   sum_b V_b grad W_ib (fluid and walls); w_i = a smooth step of |grad c_i| against its
-//   value at a flat lattice surface, times an exposure factor (no fluid neighbour in the
-//   outward cone: Marrone et al. 2010's scan region), since in a moving fluid |grad c|
-//   alone reaches 40 % of the surface value deep inside; kappa = the column sum of
-//   w V |grad c| per area at a flat lattice surface, so a column carries p_s per area.
-//   C = the largest mu0 (F + M_n^2 / 2) over sure surface particles (w >= 1/2), so the
-//   fluid is pushed, never pulled (a pull, the traction as a particle body force, lifts the
-//   top layer off: SPH without an atmosphere cannot hold it). With `external` the traction
-//   is left out (it is the jump of the particles' own field, which that solver neglects).
-//   Measured: the net force on a falling blob is right (tests), the heap of the pool over
-//   a still dipole equals the body model's with `external`; but the discrete push is not a
-//   potential force: with ~125 Pa of push at the rim of that pool (the heap's rho g dz)
-//   the contact line keeps circulating at 18 mm/s RMS (body model: 0.4 mm/s), and a blob
-//   falling onto a pole gains kinetic energy beyond the magnetic energy released. Until
-//   that is fixed it stays off by default. On a flat layer in a uniform field (issue 13,
-//   examples/rosensweig_uniform.toml in a 5 cm dish) it drains the layer toward the dish's
-//   edge, where the field concentrates, even below the critical field, and above it breaks
-//   the surface into irregular crests, not a lattice at lambda_c (README, magnetics).
-//   There the re-solve rule is blind: it measures the cache's drift through the magnets'
-//   Jacobian, zero in a uniform field, so only the frame start re-solves the traction's
-//   field; the measurements set magnetization.resolve_every = 2.
-// - A scene without magnets constructs nothing and costs nothing; magnets with a
-//   non-magnetic fluid (susceptibility 0) only report the applied field.
+// magnetization (paper eq. 5 with Langevin saturation) and the magnetic force (paper eqs.
+// 9-11).
+// - H = H_magnets (analytic, every step) + H_induced (MagnetizationSolver's self-consistent
+//   solve, cached: far dearer than a step and slower to change). Each solve measures the
+//   error the cache had reached in the Kelvin acceleration, relative to gravity and the
+//   Kelvin force, and sets the next interval to keep it under magnetization.tolerance (or
+//   every magnetization.resolve_every steps); a fast change of the magnets re-solves at once.
+//   Between solves M follows the Langevin law from the current total field.
+// - magnetization.force = "body" (default): mu0 (J_magnets M) / rho0 per unit mass, rho0 the
+//   rest density (the SPH density's surface deficit would inflate it). With `external` M is
+//   the Langevin law of H_magnets, exactly mu0 grad F(|H_magnets|) / rho0; with a
+//   self-consistent solver M is the DemagnetizationCurve M_f(|H_magnets|) fitted at each
+//   solve to the free surface's F(H) + M_n^2 / 2 (surfaceSamples, leaning on the last fit:
+//   kCurveMemory), so the force stays a gradient (a pool can rest) and a resting surface
+//   obeys the ferrohydrostatic Bernoulli law rho g z_s = mu0 (F(H) + M_n^2 / 2) + C.
+// - magnetization.force = "surface" (experimental): the total field's Kelvin force taken
+//   into the pressure, a push p_s = C - mu0 (F(H) + M_n^2 / 2) along the colour gradient of
+//   surface particles, C the largest mu0 (F + M_n^2 / 2) of the sure ones (w >= 1/2): the
+//   fluid is pushed, never pulled. Its discrete push is not a potential force, so it stays off by default.
+// - A scene without magnets constructs nothing; with a non-magnetic fluid (susceptibility 0)
+//   the field is only reported.
+// Derivations and measurements: docs/physics/magnetization.md, "The force in the step".
 #include "sim/magnetics/DemagnetizationCurve.hpp"
 #include "sim/magnets/MagnetField.hpp"
 #include "sim/spatial/NeighborSearch.hpp"
@@ -216,11 +170,10 @@ private:
     DemagnetizationCurve curve_;             // M along H_magnets against |H_magnets|, fitted at each solve
     std::vector<Vec3> HextSolved_;           // applied field at the last solve, current order
     static constexpr size_t kMaxInterval = 200;
-    // The free-surface curve's memory [s]: the time over which its fits average the surface.
-    // Without it a fit follows each solve's samples, whose particles shuffle, and with the
-    // constant C free (as the law has it) a pool at chi0 1.5 sloshed at 10.8 mm/s; with 0.1 s
-    // it rests (0.45-0.84 mm/s). The price: after a change of the field the curve lags its
-    // surface by about this time (three frames at 30 fps).
+    // The free-surface curve's memory [s]: the time over which its fits average the surface,
+    // whose particles shuffle between solves (without it a resting pool sloshed). The price:
+    // after a change of the field the curve lags by about this time. Measurements:
+    // docs/physics/magnetization.md, "The free-surface curve fit".
     static constexpr double kCurveMemory = 0.1;
     size_t interval_ = 1;                    // steps a solve may serve (measured, see solve())
     double inducedShare_ = 0;                // rms |H_ind| / rms |H| at the last solve

@@ -250,13 +250,10 @@ double FluidSimulation::maxSpeed(size_t* which) const {
 double FluidSimulation::chooseTimeStep(double dtLimit, double speed, double* stable) const {
     // Force criterion (Monaghan 1992): dt <= 0.25 sqrt(h / |a|), h the smoothing length,
     // half the cubic spline's support (the spacing here): the body force moves a particle
-    // at most a dt^2 = spacing / 16 in a step before pressure answers. Gravity alone never
-    // binds at SPH spacings; a strong Kelvin force near a magnet pole does. With the
-    // support in its place (before issue 29) the step let the body force move a particle
-    // 1/8 spacing, past what DFSPH takes: a settled pool at 0.75 mm over a 3 A m^2 dipole
-    // (31 g at the floor) went from 0.98 to 31 mm/s RMS within 0.1 s at a dt^2 = 0.125
-    // spacing (with the solve converged, cap 1000: 25 mm/s), and stayed at rest at 0.082
-    // spacing and below. Both are known at the step's start, so the step stays a pure
+    // at most a dt^2 = spacing / 16 in a step before pressure answers; a strong Kelvin force
+    // near a magnet pole binds it, gravity alone never does. Measurements (1/8 spacing kept
+    // a pool from resting): docs/physics/sph-solver.md, "The time step's force criterion".
+    // Gravity and the Kelvin force are known at the step's start, so the step stays a pure
     // function of the state (exact resume).
     const double amax = scene_.solver.gravity.norm() + (magnetics_ ? magnetics_->maxAcceleration() : 0.0);
     const SolverParams& sp = scene_.solver;

@@ -152,11 +152,9 @@ public:
     // SPH operators they share, in sorted order.
 
     /// Wall pressure (Akinci 2012): a wall particle pushes a fluid particle with the fluid
-    /// particle's own pressure, p_i / rho_i^2 (not the symmetric pair sum). A mirrored
-    /// 2 p_i pushes twice as hard and fixes the pressure of the first layer next to a wall,
-    /// but with DFSPH's Jacobi iteration and the hard wall constraint it feeds energy into
-    /// the corners of a resting tank (mean speed grew from 2 to 3 cm/s within 2 s); so the
-    /// near-wall layer carries extra pressure instead, and the interior is hydrostatic.
+    /// particle's own pressure, p_i / rho_i^2 (not the symmetric pair sum): a mirrored 2 p_i
+    /// fed energy into a resting tank's corners. Measurements: docs/physics/sph-solver.md,
+    /// "Walls".
     static constexpr Real kWallMirror = 1;
 
     std::vector<Vec3>& solverVelocities() { return v_; }

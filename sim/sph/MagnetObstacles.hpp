@@ -14,11 +14,9 @@
 // its velocity component into the body relative to the magnet's motion is removed.
 // There are no boundary particles on a body: the constraint alone holds the fluid off.
 // So that the pressure solve knows of it, the solvers first remove the velocity into a
-// body of each particle the step would carry into it (stopMotionInto). Without that the
-// solve predicted positions inside the body, the position constraint undid them after the
-// step, and the next solve pushed the compressed fluid apart: energy from nothing (a dipole
-// touching a dish's floor spun its fluid up to 3.9 m/s within 0.2 s; the mechanical energy
-// rose above its start; tests/sim/app/test_extremes.cpp).
+// body of each particle the step would carry into it (stopMotionInto): otherwise the solve
+// predicts positions the constraint undoes, and the bodies pump energy into the fluid
+// (docs/physics/sph-solver.md, "Magnet bodies"; tests/sim/app/test_extremes.cpp).
 // The fluid's blocks are seeded around the bodies (FluidSeed.cpp): a magnet placed in the
 // fluid displaces it, and a block's count is the fluid's, the magnet's volume left out.
 #include "sim/core/Types.hpp"

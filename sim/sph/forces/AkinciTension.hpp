@@ -16,11 +16,9 @@ namespace ferro {
 class AkinciTension : public PairForceModel {
 public:
     static constexpr const char* kName = "akinci2013";
-    /// Akinci's model has no physical coefficient: measured on a free droplet (radius 11
-    /// spacings, zero gravity) so that its interior pressure grows with sigma as the Laplace
-    /// pressure 2 sigma / R. Only there: at other radii the slope stays ~175 /m instead of
-    /// 2 / R, and a droplet oscillates ~4x slower than Rayleigh's period (both measured by the
-    /// hidden [known-failure] cases of tests/sim/sph/test_SurfaceTension.cpp).
+    /// Akinci's model has no physical coefficient: fitted on a free droplet of radius 11
+    /// spacings to the Laplace pressure 2 sigma / R, and right only there. Measurements:
+    /// docs/physics/sph-solver.md, "Surface tension".
     static constexpr double kCalibration = 0.0029;
     /// Weight of the cohesion term against the curvature term. Akinci's cohesion is
     /// gamma m_j C(r), not dimensionally consistent with the curvature term; with V_j C(r)
