@@ -664,15 +664,10 @@ TEST_CASE("Jittered ball in a uniform field: interior field per particle, conver
         REQUIRE(e.interior > 1500);
         REQUIRE(e.stats.converged);
         REQUIRE(e.stats.residual <= 1e-4);
-        // The issue's targets, with the local correction (off by default in the
-        // simulation: MagnetizationParams.hpp). Measured (direct): mean 0.3-1.3 %, RMS 0.4-2.2 %, worst
-        // 1.0-7.6 % (chi0 = 10 linear the largest). Without the local correction
-        // (MagnetizationParams::localCorrection) RMS was 5.6 % at chi0 = 3 and 11.5 % at 10,
-        // worst 19 % and 41 %: the random directions of each particle's near neighbours
-        // seen through the smoothed near field. SPH volumes (1 / sum_j W_ij) do not remove
-        // that (uncorrected: 4.8 % at chi0 = 3, 9.6 % at 10, against 5.0 % and 9.2 % with
-        // rest volumes and today's surface term; the "[.figures]" table): the noise is in
-        // directions, not in the density.
+        // Reference: the analytic interior field of a uniformly magnetized sphere (ballErrors).
+        // Bounds: the issue's targets, met with the local correction (off by default in the
+        // simulation); measured with and without it: docs/physics/magnetization.md, "Tested
+        // accuracy".
         REQUIRE(e.mean < 0.02);
         REQUIRE(e.rms < 0.03);
         REQUIRE(e.worst < 0.10);

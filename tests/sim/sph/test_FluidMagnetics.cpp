@@ -752,33 +752,17 @@ TEST_CASE("a pool over a magnet held still comes to rest in ferrohydrostatic bal
     CAPTURE(c.solver, c.magnetization, c.susceptibility, c.curveFit, rms, sim.spacing(), heap.rise, heap.predicted);
     REQUIRE(rms < 0.001);
     if (c.magnetization == "external") {
+        // Reference: rho g dz = mu0 dF, the analytic force's line integral along the surface
+        // (surfaceBalance; measured within 2 %).
         REQUIRE(heap.predicted > sim.spacing());
         REQUIRE(std::abs(heap.rise - heap.predicted) < 0.1 * heap.predicted);
     } else {
-        // The self-consistent solve: the heap against the ferrohydrostatic Bernoulli law with
-        // the particles' own H and M at the surface (the traction term mu0 M_n^2 / 2 included).
-        // Before the body force's M became a function of |H_magnets| (DemagnetizationCurve),
-        // this pool never rested (2.7 mm/s RMS, a convection roll). Measured now (this pool,
-        // 2 s) with the "boundary" fit (the default until 2026-12-02): RMS speed 0.42-0.49 mm/s;
-        // worst deviation from the law on the surface half a spacing out from the column tops
-        // (ringProfile), on the mean of 11 looks over the next 0.5 s: 13.1 % (chi0 0.5), 38.8 %
-        // (1.5, DFSPH), 43.5 % (1.5, WCSPH) of the centre rise, the heap too tall on the axis at
-        // 1.5. Its bound (1.5 under 50 %) holds it where it is, so that a change that takes the
-        // heap further off the law fails here. (Measured at
-        // the top particles' centres instead, the same pools read 11.9 / 11.4 / 16.2 %: the
-        // ruler this test used until 2026-12-02, which put F + M_n^2 / 2 half a spacing
-        // too deep, where it is 38 Pa larger than at the surface on the axis and 19 Pa at the
-        // outermost ring, at chi0 1.5.) The cause:
-        // the DemagnetizationCurve's surface samples are the floor and walls at rest, not the
-        // free surface (sim/sph/FluidMagnetics.cpp; README, magnetics).
-        // With magnetization.curve_fit = "free_surface" the curve's potential is fitted to the
-        // free surface's F + M_n^2 / 2 (FluidMagnetics::surfaceSamples), so the law is what
-        // the force is built to meet; what is left is how well a smooth curve of |H_magnets|
-        // and a 2,560-particle surface can. Measured (2026-12-02, C free and the curve's
-        // memory): 9.5 % (chi0 0.5), 32 % (1.5, DFSPH), 5.6 % (1.5, WCSPH), RMS speed
-        // 0.58-0.84 mm/s; single looks scatter by +-10 %. The issue's 10 % is met on the
-        // 10,240-particle pool below (4.4 % and 4.5 %, a test of its own), not on this coarse
-        // one at chi0 1.5 with DFSPH. Bounds with the scatter's room.
+        // The self-consistent solve: the heap against the ferrohydrostatic Bernoulli law
+        // (Rosensweig ch. 5) with the particles' own H and M at the surface, traction included.
+        // Reference: that law. Bound: 20 % / 40 % of the rise on this coarse pool (measured
+        // 9.5 %, 32 % DFSPH, 5.6 % WCSPH, looks scattering +-10 %): the resolution's, not an
+        // accuracy claim; the claim is the 10,240-particle pool's 10 % below. Measurements:
+        // docs/physics/magnetization.md, "Tested accuracy".
         const BernoulliCheck law = bernoulliCheckOverTime(sim, 0.025);
         WARN("Bernoulli along the surface (" << c.solver << ", chi0 " << c.susceptibility << ", curve fit " << c.curveFit << "): centre rise "
              << law.rise << " Pa, worst deviation " << law.worst << " Pa, with the capillary term "
@@ -856,9 +840,9 @@ static BernoulliCheck finePoolBernoulli(double chi0, const std::string& fit, dou
 }
 
 // Issue 13's must-show on the pool at 10,240 particles with the default (free-surface) curve
-// fit, 3-5 CPU minutes a case. Measured (2026-12-02, C free and the curve's memory): 4.4 %
-// (chi0 0.5; rise 30 Pa) and 4.5 % (1.5; rise 32 Pa, on the axis mu0 F 32 Pa, mu0 Mn^2/2
-// 45 Pa), RMS speed 0.45 mm/s. (Before C was freed: 4.3 % and 12.8 %.)
+// fit, 3-5 CPU minutes a case. Reference: the ferrohydrostatic Bernoulli law; bound: the
+// issue's 10 % of the rise (measured 4.4 % and 4.5 %: docs/physics/magnetization.md,
+// "Tested accuracy").
 TEST_CASE("a finer pool over a still magnet keeps to the Bernoulli law within 10 % of its rise (chi0 0.5 and 1.5)",
           "[magnetics][slow]") {
     const double chi0 = GENERATE(0.5, 1.5);
@@ -924,8 +908,10 @@ std::map<std::pair<int, int>, double> surfaceBlocks(const std::vector<Vec3>& x, 
 // The example's depth, fluid and field direction, its dish cut to a 1.77 cm radius and
 // 2,560 particles (spacing 1.46 mm instead of 1.24 mm: 6.8 layers in the 1 cm depth) to keep
 // the case under a minute of CPU (26 s measured); 0.8 x the critical field; 2 s, the
-// example's duration. Measured: shape change 0.009 spacing RMS, the layer 1.1 spacings lower
-// on average (the lattice settling), no particle detached.
+// example's duration. Reference: below M_c a flat layer is stable (Rosensweig's linear
+// stability) and the body force is exactly zero; bound: flat to a quarter spacing, as the
+// resting dish (measured 0.009 spacing RMS, the layer 1.1 spacings lower on average from the
+// lattice settling, no particle detached).
 TEST_CASE("below the critical field a flat layer in a uniform field stays flat and attached", "[magnetics][slow]") {
     const double radius = 0.0177;
     FluidSimulation sim(loadExample("rosensweig_uniform.toml",

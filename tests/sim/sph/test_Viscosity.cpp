@@ -167,10 +167,11 @@ TEST_CASE("a shear mode between free-slip walls decays at the SPH operator's rat
         // nu k^2 only where the kernel's second moments are those of the continuum. On a
         // cubic lattice at support h = 2 spacings the moment sum V |F| x^2 z^2 / r^2 that
         // this mode feels is 0.698 of its integral (0.674 at this k, measured here); the
-        // lattice stays near that for the short time measured.
+        // lattice stays near that for the short time measured. The bound contains 0.698.
         REQUIRE(m.discrete / m.analytic == Approx(0.674).margin(0.03));
-        // The measured decay follows the operator (and backward Euler's ln(1 + x) / x):
-        // measured 1.00-1.07 of `expected` (both solvers, implicit and explicit).
+        // The measured decay follows the operator (and backward Euler's ln(1 + x) / x): the
+        // bound contains 1 (measured 1.00-1.07, both solvers, implicit and explicit;
+        // docs/physics/sph-solver.md, "Tested accuracy").
         REQUIRE(m.rate / m.expected == Approx(1.05).margin(0.08));
     }
 }
