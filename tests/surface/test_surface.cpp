@@ -90,6 +90,20 @@ TEST_CASE("a resting pool: the anisotropic top surface is at least 3x flatter th
     CHECK(roughIso > 3 * roughAn);
 }
 
+namespace {
+/// A filled shape's surface: within a quarter spacing of the shape on average (`dist`, the
+/// mean vertex distance), enclosing the particles' volume (count times s^3) within 3 %.
+void checkShape(SurfaceMethod m, const char* shape, double dist, const std::vector<Vec3>& x, const TriangleMesh& mesh,
+                double s) {
+    const double particles = double(x.size()) * s * s * s;
+    const double volume = enclosedVolume(mesh);
+    WARN(methodName(m) << " " << shape << ": mean distance " << dist / s << " spacings, volume / particle volume "
+                       << volume / particles);
+    CHECK(dist < s / 4);
+    CHECK(volume == Approx(particles).epsilon(0.03));
+}
+} // namespace
+
 TEST_CASE("particles filling a sphere and a box: the surface and the volume are where they belong", "[surface]") {
     const double s = kSpacing;
     for (SurfaceMethod m : {SurfaceMethod::Anisotropic, SurfaceMethod::Isotropic}) {
@@ -99,13 +113,7 @@ TEST_CASE("particles filling a sphere and a box: the surface and the volume are 
             const TriangleMesh mesh = extractSurface(x, withMethod(m), s);
             double dist = 0;
             for (const Vec3& v : mesh.vertices) dist += std::abs(v.norm() - radius);
-            dist /= mesh.vertices.size();
-            const double particles = double(x.size()) * s * s * s;
-            const double volume = enclosedVolume(mesh);
-            WARN(methodName(m) << " sphere: mean distance " << dist / s << " spacings, volume / particle volume "
-                               << volume / particles);
-            CHECK(dist < s / 4);
-            CHECK(volume == Approx(particles).epsilon(0.03));
+            checkShape(m, "sphere", dist / mesh.vertices.size(), x, mesh, s);
             // Outward: each vertex normal points away from the centre.
             size_t outward = 0;
             for (size_t i = 0; i < mesh.vertices.size(); ++i) outward += mesh.normals[i].dot(mesh.vertices[i]) > 0;
@@ -124,13 +132,7 @@ TEST_CASE("particles filling a sphere and a box: the surface and the volume are 
                 const double outside = out.cwiseMax(Vec3::Zero()).norm();
                 dist += outside > 0 ? outside : -double(out.maxCoeff());
             }
-            dist /= mesh.vertices.size();
-            const double particles = double(x.size()) * s * s * s;
-            const double volume = enclosedVolume(mesh);
-            WARN(methodName(m) << " box: mean distance " << dist / s << " spacings, volume / particle volume "
-                               << volume / particles);
-            CHECK(dist < s / 4);
-            CHECK(volume == Approx(particles).epsilon(0.03));
+            checkShape(m, "box", dist / mesh.vertices.size(), x, mesh, s);
         }
     }
 }
