@@ -57,11 +57,20 @@ CLI::Option* addSetOption(CLI::App& app, std::vector<std::string>& overrides, co
     return app.add_option("--set", overrides, help)->type_name("KEY=VALUE");
 }
 
+// --print-scene-keys is --print-scene-inputs in another format; one process parses one
+// command line, so the choice of format can live here rather than in every stage's main.
+static bool printKeySpecs = false;
+
 CLI::Option* addSceneInputsFlag(CLI::App& app, bool& flag, const std::vector<CLI::Option*>& requiredOtherwise,
                                 const std::vector<const bool*>& queries) {
     for (CLI::Option* o : requiredOtherwise)
         o->description(o->get_description() + " (required)");
+    app.add_flag("--print-scene-keys", printKeySpecs,
+                 "print the scene keys this stage reads with their type, range and default, one a line, and exit "
+                 "(docs/reference/scene.md is made from it)");
     app.final_callback([&flag, requiredOtherwise, queries] {
+        if (printKeySpecs)
+            flag = true;
         if (flag)
             return;
         for (const bool* q : queries)
@@ -78,7 +87,7 @@ CLI::Option* addSceneInputsFlag(CLI::App& app, bool& flag, const std::vector<CLI
 ExitCode printSceneInputs(SceneDocument& doc, const std::function<void(const SceneDocument&)>& parse) {
     doc.recordReads();
     parse(doc);
-    std::cout << doc.readsText();
+    std::cout << (printKeySpecs ? doc.keySpecsText() : doc.readsText());
     return kExitOk;
 }
 

@@ -70,6 +70,7 @@ std::uint64_t fnv1a64(const std::string& s)
 
 struct SceneDocument::ReadLog {
     std::map<std::string, std::string> values; // "path.key" -> TOML text or "(absent)"
+    std::map<std::string, std::pair<std::string, std::string>> specs; // "path.key" -> type, default
 };
 
 SceneDocument::SceneDocument() : root_(std::make_unique<toml::table>()) {}
@@ -178,6 +179,24 @@ void SceneDocument::noteRead(const std::string& tablePath, const std::string& ke
     std::string line = text.str();
     std::replace(line.begin(), line.end(), '\n', ' ');
     reads_->values[tablePath.empty() ? key : tablePath + "." + key] = line;
+}
+
+void SceneDocument::noteSpec(const std::string& tablePath, const std::string& key, const std::string& type,
+                             const std::string& def) const
+{
+    if (reads_)
+        reads_->specs[tablePath.empty() ? key : tablePath + "." + key] = {type, def};
+}
+
+std::string SceneDocument::keySpecsText() const
+{
+    std::string out;
+    if (reads_)
+        for (const auto& entry : reads_->values) {
+            const auto s = reads_->specs.find(entry.first);
+            out += entry.first + "\t" + (s == reads_->specs.end() ? "-\t-" : s->second.first + "\t" + s->second.second) + "\n";
+        }
+    return out;
 }
 
 std::string SceneDocument::readsText() const

@@ -71,6 +71,8 @@ public:
     const std::string& tablePath() const { return path_; }
 
 private:
+    /// Notes the key's type, range and default in the document's key table (noteSpec).
+    void spec(const std::string& key, const std::string& type, const std::string& def) const;
     const SceneDocument* doc_;
     const toml::table* table_;
     std::string path_;
@@ -111,8 +113,17 @@ public:
     /// `path.key = <TOML value>` or `path.key = (absent)`: the text of a stage's make stamp
     /// (scripts/shot.mk), which changes exactly when a value the stage read changes.
     std::string readsText() const;
+    /// The same keys with what the getter that read each one checks, one line each,
+    /// `path.key<TAB>type and range<TAB>default` ("required" when there is none, "-" for keys
+    /// read as raw nodes): the code's own key table, from which docs/reference/scene.md is
+    /// generated (scripts/docs/scene-reference.py).
+    std::string keySpecsText() const;
     /// Called by TableReader for each key it looks up (no-op unless recording).
     void noteRead(const std::string& tablePath, const std::string& key, const toml::node* node) const;
+    /// Called by TableReader's typed getters: the key's type and range and its default. The
+    /// outermost getter notes last (positive() after the number() it calls), so it wins.
+    void noteSpec(const std::string& tablePath, const std::string& key, const std::string& type,
+                  const std::string& def) const;
 
 private:
     SceneDocument();

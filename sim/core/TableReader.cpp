@@ -65,9 +65,16 @@ void TableReader::fail(const std::string& key, const std::string& message) const
     throw SceneError(where(key) + ": " + full + ": " + message);
 }
 
+void TableReader::spec(const std::string& key, const std::string& type, const std::string& def) const
+{
+    doc_->noteSpec(path_, key, type, def);
+}
+
 double TableReader::number(const std::string& key, double def) const
 {
-    return has(key) ? number(key) : def;
+    const double v = has(key) ? number(key) : def;
+    spec(key, "number", formatNumber(def));
+    return v;
 }
 
 double TableReader::number(const std::string& key) const
@@ -85,6 +92,7 @@ double TableReader::number(const std::string& key) const
     // TOML allows nan and inf; no physical parameter of a shot can be either.
     if (!std::isfinite(v))
         fail(key, "must be finite (got " + formatNumber(v) + ")");
+    spec(key, "number", "required");
     return v;
 }
 
@@ -93,6 +101,7 @@ double TableReader::positive(const std::string& key, double def) const
     double v = number(key, def);
     if (!(v > 0))
         fail(key, "must be > 0 (got " + formatNumber(v) + ")");
+    spec(key, "number > 0", formatNumber(def));
     return v;
 }
 
@@ -101,11 +110,13 @@ double TableReader::nonNegative(const std::string& key, double def) const
     double v = number(key, def);
     if (!(v >= 0))
         fail(key, "must be >= 0 (got " + formatNumber(v) + ")");
+    spec(key, "number >= 0", formatNumber(def));
     return v;
 }
 
 long TableReader::integer(const std::string& key, long def) const
 {
+    spec(key, "integer", std::to_string(def));
     const toml::node* n = node(key);
     if (!n)
         return def;
@@ -117,6 +128,7 @@ long TableReader::integer(const std::string& key, long def) const
 
 bool TableReader::boolean(const std::string& key, bool def) const
 {
+    spec(key, "boolean", def ? "true" : "false");
     const toml::node* n = node(key);
     if (!n)
         return def;
@@ -131,6 +143,7 @@ double TableReader::positive(const std::string& key) const
     const double v = number(key);
     if (!(v > 0))
         fail(key, "must be > 0 (got " + formatNumber(v) + ")");
+    spec(key, "number > 0", "required");
     return v;
 }
 
@@ -140,6 +153,7 @@ int TableReader::integerInRange(const std::string& key, int def, long lo, long h
     if (v < lo || v > hi)
         fail(key, "must be in [" + std::to_string(lo) + ", " + std::to_string(hi) + "] (got " +
                       std::to_string(v) + ")");
+    spec(key, "integer in [" + std::to_string(lo) + ", " + std::to_string(hi) + "]", std::to_string(def));
     return static_cast<int>(v);
 }
 
@@ -152,6 +166,7 @@ Vec3d TableReader::unitVector(const std::string& key, const Vec3d& def) const
     const double big = d.cwiseAbs().maxCoeff();
     if (!(big > 0))
         fail(key, "must be a non-zero vector (got " + formatVec(d) + ")");
+    spec(key, "direction [x, y, z], non-zero", formatVec(def));
     return (d / big).normalized();
 }
 
@@ -166,7 +181,9 @@ void TableReader::box(const std::string& minKey, const std::string& maxKey, Vec3
 
 std::string TableReader::string(const std::string& key, const std::string& def) const
 {
-    return has(key) ? string(key) : def;
+    std::string v = has(key) ? string(key) : def;
+    spec(key, "string", "\"" + def + "\"");
+    return v;
 }
 
 std::string TableReader::string(const std::string& key) const
@@ -177,6 +194,7 @@ std::string TableReader::string(const std::string& key) const
     auto s = n->as_string();
     if (!s)
         fail(key, std::string("expected a string (got ") + typeName(*n) + ")");
+    spec(key, "string", "required");
     return s->get();
 }
 
@@ -184,17 +202,20 @@ std::string TableReader::choice(const std::string& key, const std::vector<std::s
                                 const std::string& def) const
 {
     std::string v = string(key, def);
-    if (std::find(choices.begin(), choices.end(), v) != choices.end())
-        return v;
     std::string list;
     for (const std::string& c : choices)
         list += (list.empty() ? "\"" : ", \"") + c + "\"";
+    spec(key, "one of " + list, "\"" + def + "\"");
+    if (std::find(choices.begin(), choices.end(), v) != choices.end())
+        return v;
     fail(key, "must be one of " + list + " (got \"" + v + "\")");
 }
 
 Vec3d TableReader::vec3(const std::string& key, const Vec3d& def) const
 {
-    return has(key) ? vec3(key) : def;
+    const Vec3d v = has(key) ? vec3(key) : def;
+    spec(key, "[x, y, z]", formatVec(def));
+    return v;
 }
 
 Vec3d TableReader::vec3(const std::string& key) const
@@ -222,6 +243,7 @@ Vec3d TableReader::vec3(const std::string& key) const
     // uninitialised elements after a nan.
     if (!v.allFinite())
         fail(key, "must be finite (got " + formatVec(v) + ")");
+    spec(key, "[x, y, z]", "required");
     return v;
 }
 
@@ -237,12 +259,14 @@ std::string TableReader::path(const std::string& key) const
     std::error_code ec;
     if (!fs::is_regular_file(p, ec))
         fail(key, "file not found: " + p.string());
+    spec(key, "file path, relative to the scene", "required");
     return p.string();
 }
 
 TableReader TableReader::table(const std::string& key) const
 {
     std::string full = path_.empty() ? key : path_ + "." + key;
+    spec(key, "table", "empty");
     const toml::node* n = node(key);
     if (!n)
         return TableReader(*doc_, emptyTable(), full);
@@ -256,6 +280,7 @@ std::vector<TableReader> TableReader::tables(const std::string& key) const
 {
     std::string full = path_.empty() ? key : path_ + "." + key;
     std::vector<TableReader> out;
+    spec(key, "array of tables", "none");
     const toml::node* n = node(key);
     if (!n)
         return out;

@@ -698,3 +698,27 @@ TEST_CASE("a stage's scene inputs are exactly the keys its parser read, with the
     parseShotFps(quiet);
     CHECK(quiet.readsText().empty()); // not recording
 }
+
+TEST_CASE("the key table names each key's type, range and default as its getter checks them", "[scene]")
+{
+    // The scene reference (docs/reference/scene.md) is made from this table: the outermost
+    // getter wins (positive() over the number() it calls), a present key still shows the
+    // default it would have had, and required keys say so.
+    SceneDocument doc = SceneDocument::parse("[t]\na = 2.5\nmode = \"b\"\nv = [1, 2, 3]\n", "t.toml");
+    doc.recordReads();
+    const TableReader t = doc.section("t");
+    CHECK(t.positive("a", 1.0) == 2.5);
+    CHECK(t.nonNegative("b", 0.25) == 0.25);
+    CHECK(t.integerInRange("n", 3, 1, 9) == 3);
+    CHECK(t.choice("mode", {"a", "b"}, "a") == "b");
+    CHECK(t.boolean("flag", true));
+    CHECK(t.vec3("v") == Vec3d(1, 2, 3));
+    CHECK_FALSE(t.has("raw"));
+    CHECK(doc.keySpecsText() == "t.a\tnumber > 0\t1\n"
+                                "t.b\tnumber >= 0\t0.25\n"
+                                "t.flag\tboolean\ttrue\n"
+                                "t.mode\tone of \"a\", \"b\"\t\"a\"\n"
+                                "t.n\tinteger in [1, 9]\t3\n"
+                                "t.raw\t-\t-\n"
+                                "t.v\t[x, y, z]\trequired\n");
+}
