@@ -2,17 +2,20 @@
 # Installs Ferro's Debian 12 build and run dependencies that are missing. clang and
 # libclang-rt-dev build the libFuzzer targets of tests/fuzz, which the test suite runs briefly
 # (libFuzzer's library is only a recommend of clang, and recommends are not installed).
+# python3 runs the suite's checks of the manual (scripts/docs/) and of rendered images.
 # Idempotent: installs nothing when everything is present.
 # Usage: install-deps.sh [--with-video] [--with-bench] [--with-slurm] [--with-blender]
 # As root it runs apt-get;
 # otherwise it prints the exact apt-get line to run and exits 1.
 set -euo pipefail
+# --help prints the comment above (everything before `set -e`).
+if [[ "${1:-}" == "--help" || "${1:-}" == "-h" ]]; then sed -n '2,/^set -e/{/^set -e/d;s/^# \{0,1\}//;p}' "$0"; exit 0; fi
 
 PACKAGES=(
   build-essential cmake
   libeigen3-dev libtbb-dev libboost-iostreams-dev libopenvdb-dev
   libcgal-dev libassimp-dev libtomlplusplus-dev libcli11-dev catch2
-  povray parallel
+  povray parallel python3
   clang libclang-rt-dev
 )
 
@@ -28,8 +31,8 @@ for arg in "$@"; do
   case "$arg" in
     --with-video) PACKAGES+=(ffmpeg) ;;
     --with-bench) PACKAGES+=(gnuplot-nox) ;;
-    --with-slurm) PACKAGES+=(slurm-wlm munge python3) ;;
-    --with-blender) PACKAGES+=(blender python3) ;;
+    --with-slurm) PACKAGES+=(slurm-wlm munge) ;;
+    --with-blender) PACKAGES+=(blender) ;;
     *) echo "install-deps: error: unknown option $arg (--with-video, --with-bench, --with-slurm, --with-blender)" >&2; exit 2 ;;
   esac
 done

@@ -132,13 +132,20 @@ fi
 if [[ $slurm == 1 ]]; then
   exec "$root/scripts/slurm/submit.sh" "$out" "$first_render" "$last_render" "${submit_args[@]}" -- "${sbatch_args[@]}"
 fi
+# make answers 2 for any failed rule, which would read as "bad input": a stage that failed
+# is exit 3 (the run failed; sim/core/ExitCodes.hpp), its own line already on stderr.
+run_make() {
+  make -C "$out" --no-print-directory "$@" && return 0
+  echo "shot.sh: error: a stage failed (its line is above); the frames before it are kept: run the same command again to continue" >&2
+  exit 3
+}
 start=$SECONDS
 echo "shot.sh: $scene -> $out: frames $first_render..$last_render of 0..$last, spikes $([[ $spikes == 1 ]] && echo on || echo off), $jobs jobs${preset:+, preset $preset}" >&2
-make -C "$out" --no-print-directory -j"$jobs" prepare
-make -C "$out" --no-print-directory -j"$jobs" FIRST="$first_render" LAST="$last_render" frames
+run_make -j"$jobs" prepare
+run_make -j"$jobs" FIRST="$first_render" LAST="$last_render" frames
 if [[ $video == 1 && -z "$frames" ]]; then
   if command -v ffmpeg >/dev/null; then
-    make -C "$out" --no-print-directory video
+    run_make video
   else
     echo "shot.sh: ffmpeg not found: no video (frames are in $out/png)" >&2
   fi

@@ -24,6 +24,8 @@
 # SBATCH_OPTION words after `--` go to every sbatch (partition, account, qos, ...).
 # Exit codes: 2 bad arguments, 4 no Makefile in OUTDIR or no sbatch, 1 a submission failed.
 set -euo pipefail
+# --help prints the comment above (everything before `set -e`).
+if [[ "${1:-}" == "--help" || "${1:-}" == "-h" ]]; then sed -n '2,/^set -e/{/^set -e/d;s/^# \{0,1\}//;p}' "$0"; exit 0; fi
 here="$(cd "$(dirname "$0")" && pwd)"
 die() { echo "submit.sh: error: $1" >&2; exit "${2:-2}"; }
 
