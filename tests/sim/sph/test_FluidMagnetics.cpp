@@ -904,7 +904,7 @@ std::map<std::pair<int, int>, double> surfaceBlocks(const std::vector<Vec3>& x, 
 // curve's fit, the re-solve rule) disturbs a layer that has no reason to move. The
 // experimental force = "surface" model, which does carry the layer's own traction, is not
 // held here: in a finite dish it drives the layer to the rim even below the critical field
-// (measured: README, magnetics section).
+// (measured: docs/physics/magnetics.md section).
 // The example's depth, fluid and field direction, its dish cut to a 1.77 cm radius and
 // 2,560 particles (spacing 1.46 mm instead of 1.24 mm: 6.8 layers in the 1 cm depth) to keep
 // the case under a minute of CPU (26 s measured); 0.8 x the critical field; 2 s, the
