@@ -226,16 +226,61 @@ SpikeInput loadSpikeInput(const SpikeScene& scene, const std::string& surfacePat
         throw SpikeInputError(surfacePath + ": negative susceptibility or saturation in the header");
 
     if (haveParticles && particles.rows() > 0) loadParticles(scene, particles, particlePath, in);
-    addMagnetHistory(scene, frameTime(scene, particles, meshHeader, frameHint), in);
+    in.time = frameTime(scene, particles, meshHeader, frameHint);
+    addMagnetHistory(scene, in.time, in);
     return in;
+}
+
+bool earlierSpikeInput(const SpikeScene& scene, const SpikeInput& in, double interval, SpikeInput& earlier)
+{
+    if (!(interval > 0) || scene.magnets.empty() || scene.magnets.size() != in.magnets.size()) return false;
+    // The frame's magnets moved as their tracks did over the interval (the header's own
+    // softening and sizes kept, so a still magnet is exactly the same magnet).
+    std::vector<Magnet> magnets = in.magnets;
+    bool moved = false;
+    for (size_t k = 0; k < magnets.size(); ++k) {
+        const Magnet now = scene.magnets[k].at(in.time), then = scene.magnets[k].at(in.time - interval);
+        magnets[k].position += then.position - now.position;
+        if (then.direction != now.direction) magnets[k].direction = then.direction;
+        magnets[k].strength = now.strength != 0 ? magnets[k].strength * (then.strength / now.strength) : then.strength;
+        moved = moved || then.position != now.position || then.direction != now.direction || then.strength != now.strength;
+    }
+    // The spikes' past reaches 4 growth times back: a field that has been still over all of
+    // it and the interval gives the same spikes (their own velocity is zero).
+    if (!moved && !in.pastMagnets.empty()) {
+        const double tau = scene.params.growthTime;
+        for (double back = 0; back <= 4 * tau + interval && !moved; back += tau / 4)
+            for (const MagnetTrack& track : scene.magnets) {
+                const Magnet a = track.at(in.time - back), b = track.at(in.time - back - interval);
+                moved = moved || a.position != b.position || a.direction != b.direction || a.strength != b.strength;
+            }
+    }
+    if (!moved) return false;
+    earlier = in;
+    earlier.time = in.time - interval;
+    earlier.magnets = std::move(magnets);
+    // The particles' |M| as it was: each scaled by the law at the magnets' field then and now
+    // (the particles' own share of the field taken as fixed over the interval).
+    const MagnetizationParams& law = in.fluid.law;
+    tbb::parallel_for(size_t(0), earlier.particles.magnetization.size(), [&](size_t i) {
+        const Vec3d& x = earlier.particles.positions[i];
+        const double now = langevinMagnetization(magnetField(in.magnets, x).norm(), law.susceptibility, law.saturation);
+        const double then =
+            langevinMagnetization(magnetField(earlier.magnets, x).norm(), law.susceptibility, law.saturation);
+        if (now > 0) earlier.particles.magnetization[i] *= then / now;
+    });
+    earlier.pastMagnets.clear();
+    earlier.pastWeights.clear();
+    addMagnetHistory(scene, earlier.time, earlier);
+    return true;
 }
 
 namespace {
 
 /// The input surface's vertex velocities carried to `points` (the spiky mesh's vertices before
 /// displacement, on or next to the input surface): each takes its nearest input vertex's. The
-/// spikes move with the surface they stand on; their own growth is not added yet. Empty when the
-/// surface has no velocities.
+/// spikes move with the surface they stand on (their own motion is added by spikeFrame). Empty
+/// when the surface has no velocities.
 std::vector<Vec3> surfaceVelocityAt(const TriangleMesh& surface, const std::vector<Vec3>& points)
 {
     if (surface.velocities.empty() || surface.velocities.size() != surface.vertices.size()) return {};
@@ -255,9 +300,16 @@ SpikeResult spikeFrame(const SpikeScene& scene, const std::string& surfacePath, 
 {
     refuseToOverwriteInputs("--out", outPath, {surfacePath, particlePath});
     const SpikeInput in = loadSpikeInput(scene, surfacePath, particlePath, frameHint);
-    SpikeResult res = addSpikes(in, scene.params);
+    // A mesh with velocities gets the spikes' own motion too: their displacement against the
+    // one a frame earlier on the same surface (the motion a frame's renders blur over).
+    const double interval = 1.0 / scene.fps;
+    SpikeInput earlier;
+    const bool motion = !in.surface.velocities.empty() && earlierSpikeInput(scene, in, interval, earlier);
+    SpikeResult res = addSpikes(in, scene.params, motion ? &earlier : nullptr, interval);
     TriangleMesh& out = res.mesh;
     out.velocities = surfaceVelocityAt(in.surface, res.refined.vertices);
+    if (!out.velocities.empty() && res.spikeVelocity.size() == out.velocities.size())
+        for (size_t i = 0; i < out.velocities.size(); ++i) out.velocities[i] += res.spikeVelocity[i];
     if (!hasComment(out.comments, "magnet_count")) {
         ParticleTable header;
         header.comments = out.comments;

@@ -37,7 +37,15 @@ SpikeScene parseSpikeScene(const SceneDocument& doc);
 SpikeInput loadSpikeInput(const SpikeScene& scene, const std::string& surfacePath,
                           const std::string& particlePath, int frameHint = -1);
 
-/// One frame: load, addSpikes, write `outPath` atomically (PLY with normals and the input's
+/// The same frame `interval` [s] earlier, for the spikes' own velocity (addSpikes' `earlier`):
+/// the magnets moved back along the scene's tracks, their past with them, the particles' |M|
+/// scaled by the law at the magnets' field then and now; the same surface and particle
+/// positions. False (and `earlier` untouched) when the magnets do not come from the scene's
+/// tracks, or when the field was still over the interval and the spikes' whole past: then the
+/// spikes stand still on the surface.
+bool earlierSpikeInput(const SpikeScene& scene, const SpikeInput& in, double interval, SpikeInput& earlier);
+
+/// One frame: load, addSpikes (with the spikes' own motion when the surface has velocities), write `outPath` atomically (PLY with normals and the input's
 /// comments plus spike_tips, spike_spacing, critical_magnetization). Throws SpikeIoError or
 /// SpikeInputError as loadSpikeInput, MeshFileError when the output cannot be written, and
 /// std::runtime_error (never writing) if the result had a non-finite vertex.

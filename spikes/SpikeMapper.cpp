@@ -260,6 +260,69 @@ void reportTips(const SpikeSurface& surface, SpikeResult& res)
     }
 }
 
+// Phases 1-3 for one input: the wetted wall and the supercritical part of the input surface
+// (region) and the traced patterns; empty when nothing is supercritical.
+std::vector<Pattern> tracePatterns(const SpikeInput& in, const SpikeParams& P, const SurfaceFields& fields, double Mc,
+                                   InputRegion& region)
+{
+    const TriangleMesh& input = in.surface;
+    const double g = in.fluid.gravity.norm();
+    // 1. Wetted walls and the supercritical part of the input surface.
+    region = classifyInputSurface(input, fields, Mc);
+    if (std::none_of(region.active.begin(), region.active.end(), [](char a) { return a != 0; })) return {};
+    const double diagonal = boundingDiagonal(input);
+    const SurfaceRayCaster caster(input);
+    const FreeSurface freeSurface{input, caster, region.wetted};
+
+    // 2. One pattern per magnet with a supercritical origin.
+    std::vector<Pattern> patterns =
+        placePatterns(PlacementContext{in, P, fields, freeSurface, region.active, diagonal}, g, Mc);
+    if (patterns.empty()) return {};
+
+    // 3. Tips (Fig. 7): trace six axes along the surface, fill the rings between them.
+    for (Pattern& pat : patterns) traceLattice(pat, freeSurface, fields, P, Mc, diagonal);
+    settleSeams(patterns, in.magnets);
+    return patterns;
+}
+
+// Phases 5-6 on a refined surface into `out`: heights and directions, then the volume
+// offset. Returns the wetted wall it found on the refined surface.
+WettedWall displaceAndConserve(const SurfaceFields& fields, const std::vector<Pattern>& patterns, const SpikeInput& in,
+                               const SpikeParams& P, const RefinedSurface& refined, double volumeIn, TriangleMesh& out)
+{
+    WettedWall wall = findWettedWall(refined.mesh, fields, P, refined.minSpacing);
+    const SpikeSurface spikes{fields, patterns, in.magnets, P, wall};
+    const std::vector<double> weight = displaceVertices(spikes, refined, out);
+    if (P.conserveVolume) conserveVolume(out, refined, weight, volumeIn);
+    return wall;
+}
+
+// The spikes' own velocity [m/s] at each vertex of `now` (the displaced refined surface): the
+// displacement `earlier` gives the same refined surface, `interval` seconds before, against
+// now's, so the lattice's drift, a spike's growth and its fading all show, and the surface's
+// own motion does not (it is the same surface).
+std::vector<Vec3> spikeVelocity(const TriangleMesh& now, const SpikeInput& earlier, const SpikeParams& P, double Mc,
+                                const RefinedSurface& refined, double volumeIn, double interval)
+{
+    TriangleMesh before = refined.mesh;   // no spikes earlier: the undisplaced surface
+    const SurfaceFields fields(earlier, P, Mc);
+    InputRegion region;
+    const std::vector<Pattern> patterns = tracePatterns(earlier, P, fields, Mc, region);
+    if (!patterns.empty()) {
+        // A surface that has no spikes now was not refined: the wall fade's default spacing
+        // comes from the earlier patterns.
+        RefinedSurface on = refined;
+        if (!(on.minSpacing > 0)) {
+            on.minSpacing = std::numeric_limits<double>::infinity();
+            for (const Pattern& p : patterns) on.minSpacing = std::min(on.minSpacing, p.info.spacing);
+        }
+        displaceAndConserve(fields, patterns, earlier, P, on, volumeIn, before);
+    }
+    std::vector<Vec3> v(now.vertices.size());
+    for (size_t i = 0; i < v.size(); ++i) v[i] = ((now.vertices[i] - before.vertices[i]) / float(interval));
+    return v;
+}
+
 } // namespace
 
 Vec3d totalFieldAt(const SpikeInput& input, const Vec3d& x)
@@ -269,52 +332,43 @@ Vec3d totalFieldAt(const SpikeInput& input, const Vec3d& x)
     return H;
 }
 
-SpikeResult addSpikes(const SpikeInput& in, const SpikeParams& P)
+SpikeResult addSpikes(const SpikeInput& in, const SpikeParams& P, const SpikeInput* earlier, double interval)
 {
     SpikeResult res;
     const double g = in.fluid.gravity.norm();
     res.critical = criticalMagnetization(in.fluid.density - P.ambientDensity, g, in.fluid.surfaceTension, in.fluid.law);
     res.volumeIn = enclosedVolume(in.surface);
     const double Mc = res.critical.magnetization;
+    const bool motion = earlier && interval > 0;
     if (!P.enabled || in.magnets.empty() || !std::isfinite(Mc) || in.surface.empty())
         return unchangedResult(std::move(res), in.surface);
 
+    // 1-3. The supercritical region and the patterns' tips.
     const SurfaceFields fields(in, P, Mc);
-    const TriangleMesh& input = in.surface;
-
-    // 1. Wetted walls and the supercritical part of the input surface.
-    const InputRegion region = classifyInputSurface(input, fields, Mc);
-    if (std::none_of(region.active.begin(), region.active.end(), [](char a) { return a != 0; }))
-        return unchangedResult(std::move(res), in.surface);
-    const double diagonal = boundingDiagonal(input);
-    const SurfaceRayCaster caster(input);
-    const FreeSurface freeSurface{input, caster, region.wetted};
-
-    // 2. One pattern per magnet with a supercritical origin.
-    std::vector<Pattern> patterns =
-        placePatterns(PlacementContext{in, P, fields, freeSurface, region.active, diagonal}, g, Mc);
-    if (patterns.empty()) return unchangedResult(std::move(res), in.surface);
-
-    // 3. Tips (Fig. 7): trace six axes along the surface, fill the rings between them.
-    for (Pattern& pat : patterns) traceLattice(pat, freeSurface, fields, P, Mc, diagonal);
-    settleSeams(patterns, in.magnets);
+    InputRegion region;
+    const std::vector<Pattern> patterns = tracePatterns(in, P, fields, Mc, region);
+    if (patterns.empty()) {
+        // No spikes now; spikes that were there a moment ago sink at their own speed.
+        res = unchangedResult(std::move(res), in.surface);
+        if (motion)
+            res.spikeVelocity = spikeVelocity(res.mesh, *earlier, P, Mc,
+                                              RefinedSurface{in.surface, areaWeightedNormals(in.surface), 0, false},
+                                              res.volumeIn, interval);
+        return res;
+    }
 
     // 4. Refine the supercritical region (and one ring around it) to l / resolution.
-    RefinedSurface refined = refineSpikyRegion(input, region.active, patterns, P);
+    RefinedSurface refined = refineSpikyRegion(in.surface, region.active, patterns, P);
     res.refinedOk = refined.remeshed;
 
-    // 5. Heights and directions on the refined surface.
-    const WettedWall wall = findWettedWall(refined.mesh, fields, P, refined.minSpacing);
-    const SpikeSurface spikes{fields, patterns, in.magnets, P, wall};
-    const std::vector<double> weight = displaceVertices(spikes, refined, res.mesh);
-
-    // 6. Volume: offset the spiky region along the normals, weighted like the heights.
-    if (P.conserveVolume) conserveVolume(res.mesh, refined, weight, res.volumeIn);
+    // 5-6. Heights and directions on the refined surface; the volume offset.
+    const WettedWall wall = displaceAndConserve(fields, patterns, in, P, refined, res.volumeIn, res.mesh);
     res.volumeOut = enclosedVolume(res.mesh);
+    if (motion) res.spikeVelocity = spikeVelocity(res.mesh, *earlier, P, Mc, refined, res.volumeIn, interval);
     computeVertexNormals(res.mesh);
     res.refined = std::move(refined.mesh);
 
-    reportTips(spikes, res);
+    reportTips(SpikeSurface{fields, patterns, in.magnets, P, wall}, res);
     return res;
 }
 

@@ -58,6 +58,7 @@ struct SpikeParticles {
 };
 
 struct SpikeInput {
+    double time = 0;                    ///< the frame's time [s]
     TriangleMesh surface;               ///< closed fluid surface, outward triangles
     std::vector<Magnet> magnets;        ///< the magnets at the frame's time
     SpikeFluid fluid;
@@ -102,6 +103,9 @@ struct SpikeResult {
     double volumeIn = 0, volumeOut = 0; ///< enclosed volumes [m^3]
     double maxHeight = 0;            ///< largest tip height [m]
     bool refinedOk = true;           ///< false: the mesh was not a manifold CGAL could remesh
+    /// Per vertex of mesh: the spikes' own velocity over the surface they stand on [m/s]
+    /// (growing, sinking, the lattice drifting); empty unless addSpikes was given `earlier`.
+    std::vector<Vec3> spikeVelocity;
 };
 
 /// The field H [A/m] at x: the magnets plus, when given, the magnetized particles.
@@ -109,6 +113,10 @@ Vec3d totalFieldAt(const SpikeInput& input, const Vec3d& x);
 
 /// Synthesizes the spikes on input.surface. Deterministic: the same input gives the same
 /// output. Below M_c everywhere (or with spikes disabled) the surface is returned unchanged.
-SpikeResult addSpikes(const SpikeInput& input, const SpikeParams& params);
+/// With `earlier` (the same surface and particles, the magnets and their past `interval` [s]
+/// before: earlierSpikeInput) it also sets SpikeResult::spikeVelocity: the displacement now
+/// minus the one `earlier` gives on the same refined surface, over `interval`.
+SpikeResult addSpikes(const SpikeInput& input, const SpikeParams& params, const SpikeInput* earlier = nullptr,
+                      double interval = 0);
 
 } // namespace ferro

@@ -436,3 +436,61 @@ TEST_CASE("spikes grow over spikes.growth_time after the field jumps on, and equ
     // Four growth times (0.8 s) later the past is the present: the same mesh as without the lag.
     REQUIRE(frame(lagged, 1.85).mesh.vertices == frame(instant, 1.85).mesh.vertices);
 }
+
+TEST_CASE("the spikes' own velocity is the rate of their displacement: a field ramped linearly grows them at height * dH/dt / H",
+          "[spikes][velocity]")
+{
+    const double R = 0.03;
+    // A uniform field ramped linearly from 12 to 20 kA/m over 2 s (three collinear keys: the
+    // monotone spline through them is the line), tips at the critical wavelength whatever the
+    // field, every spike at full fade: each spike's height is beta |H| times a fixed profile,
+    // so d(displacement)/dt = displacement * (dH/dt) / H, the backward difference over a frame
+    // exactly so on a line.
+    const std::string text = sceneText(R, uniformField(12000) +
+                                              "[[magnets.keys]]\ntime = 0.0\nfield = 12000.0\n"
+                                              "[[magnets.keys]]\ntime = 1.0\nfield = 16000.0\n"
+                                              "[[magnets.keys]]\ntime = 2.0\nfield = 20000.0\n"
+                                              "[shot]\nfps = 30\n"
+                                              "[spikes]\nspacing = \"physical\"\ngrowth_time = 0.0\n"
+                                              "magnetization_fade = 0.05\n");
+    const SpikeScene sc = scene(text);
+    ferro::test::TempDir dir("spike-velocity");
+    const double t = 1.5, H = 18000, dHdt = 4000;
+    TriangleMesh pool = makeFlatPool(R, kDepth, 20);
+    pool.velocities.assign(pool.vertices.size(), Vec3::Zero());   // the surface at rest
+    setComment(pool, "time", std::to_string(t));
+    writeMesh(dir.file("pool.ply"), pool);
+    const SpikeResult res = spikeFrame(sc, dir.file("pool.ply"), "", dir.file("spiky.ply"));
+    REQUIRE(res.maxHeight > 1e-3);
+    REQUIRE(res.mesh.velocities.size() == res.mesh.vertices.size());
+    double worst = 0, fastest = 0;
+    for (size_t v = 0; v < res.mesh.vertices.size(); ++v) {
+        const Vec3d expected = (res.mesh.vertices[v] - res.refined.vertices[v]).cast<double>() * dHdt / H;
+        fastest = std::max(fastest, expected.norm());
+        worst = std::max(worst, (res.mesh.velocities[v].cast<double>() - expected).norm());
+    }
+    INFO("fastest expected " << fastest * 1e3 << " mm/s, worst error " << worst * 1e3 << " mm/s");
+    REQUIRE(fastest > 0.3e-3);   // tips of ~2.7 mm rising at 0.6 mm/s
+    REQUIRE(worst < 0.02 * fastest);
+    // The written file carries the same velocities (PLY vx vy vz).
+    const TriangleMesh written = readMesh(dir.file("spiky.ply"));
+    REQUIRE(written.velocities == res.mesh.velocities);
+}
+
+TEST_CASE("spikes in a field that has been still stand still on the surface: they move with it and nothing else",
+          "[spikes][velocity]")
+{
+    const double R = 0.03;
+    const SpikeScene sc = scene(sceneText(R, uniformField(15000)));
+    ferro::test::TempDir dir("spike-still");
+    TriangleMesh pool = makeFlatPool(R, kDepth, 20);
+    const Vec3 drift(0.01f, -0.002f, 0.0f);   // the fluid's surface sliding sideways [m/s]
+    pool.velocities.assign(pool.vertices.size(), drift);
+    setComment(pool, "time", "1.0");
+    writeMesh(dir.file("pool.ply"), pool);
+    const SpikeResult res = spikeFrame(sc, dir.file("pool.ply"), "", dir.file("spiky.ply"));
+    REQUIRE(res.maxHeight > 1e-3);
+    REQUIRE(res.spikeVelocity.empty());   // no earlier state to compare: nothing moved
+    REQUIRE(res.mesh.velocities.size() == res.mesh.vertices.size());
+    for (const Vec3& v : res.mesh.velocities) REQUIRE(v == drift);
+}
