@@ -275,26 +275,6 @@ bool earlierSpikeInput(const SpikeScene& scene, const SpikeInput& in, double int
     return true;
 }
 
-namespace {
-
-/// The input surface's vertex velocities carried to `points` (the spiky mesh's vertices before
-/// displacement, on or next to the input surface): each takes its nearest input vertex's. The
-/// spikes move with the surface they stand on (their own motion is added by spikeFrame). Empty
-/// when the surface has no velocities.
-std::vector<Vec3> surfaceVelocityAt(const TriangleMesh& surface, const std::vector<Vec3>& points)
-{
-    if (surface.velocities.empty() || surface.velocities.size() != surface.vertices.size()) return {};
-    const double edge = meanEdgeLength(surface);
-    std::vector<Vec3d> vertices(surface.vertices.size());
-    for (size_t i = 0; i < vertices.size(); ++i) vertices[i] = surface.vertices[i].cast<double>();
-    const HashGrid grid(vertices, edge > 0 ? std::max(2 * edge, 1e-9) : 1e-3);
-    std::vector<Vec3> out(points.size());
-    for (size_t i = 0; i < points.size(); ++i) out[i] = surface.velocities[grid.nearest(points[i].cast<double>())];
-    return out;
-}
-
-} // namespace
-
 SpikeResult spikeFrame(const SpikeScene& scene, const std::string& surfacePath, const std::string& particlePath,
                        const std::string& outPath, int frameHint)
 {
@@ -307,9 +287,6 @@ SpikeResult spikeFrame(const SpikeScene& scene, const std::string& surfacePath, 
     const bool motion = !in.surface.velocities.empty() && earlierSpikeInput(scene, in, interval, earlier);
     SpikeResult res = addSpikes(in, scene.params, motion ? &earlier : nullptr, interval);
     TriangleMesh& out = res.mesh;
-    out.velocities = surfaceVelocityAt(in.surface, res.refined.vertices);
-    if (!out.velocities.empty() && res.spikeVelocity.size() == out.velocities.size())
-        for (size_t i = 0; i < out.velocities.size(); ++i) out.velocities[i] += res.spikeVelocity[i];
     if (!hasComment(out.comments, "magnet_count")) {
         ParticleTable header;
         header.comments = out.comments;

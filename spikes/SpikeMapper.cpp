@@ -15,6 +15,8 @@
 #include <algorithm>
 #include <cmath>
 #include <limits>
+#include <map>
+#include <tuple>
 
 namespace ferro {
 
@@ -286,41 +288,127 @@ std::vector<Pattern> tracePatterns(const SpikeInput& in, const SpikeParams& P, c
 }
 
 // Phases 5-6 on a refined surface into `out`: heights and directions, then the volume
-// offset. Returns the wetted wall it found on the refined surface.
-WettedWall displaceAndConserve(const SurfaceFields& fields, const std::vector<Pattern>& patterns, const SpikeInput& in,
-                               const SpikeParams& P, const RefinedSurface& refined, double volumeIn, TriangleMesh& out)
+// offset. Returns the wetted wall it found on the refined surface and each vertex's weight of
+// the displacement (0 off the spikes, 1 on them).
+struct Displaced {
+    WettedWall wall;
+    std::vector<double> weight;
+};
+Displaced displaceAndConserve(const SurfaceFields& fields, const std::vector<Pattern>& patterns, const SpikeInput& in,
+                              const SpikeParams& P, const RefinedSurface& refined, double volumeIn, TriangleMesh& out)
 {
     WettedWall wall = findWettedWall(refined.mesh, fields, P, refined.minSpacing);
     const SpikeSurface spikes{fields, patterns, in.magnets, P, wall};
-    const std::vector<double> weight = displaceVertices(spikes, refined, out);
+    std::vector<double> weight = displaceVertices(spikes, refined, out);
     if (P.conserveVolume) conserveVolume(out, refined, weight, volumeIn);
-    return wall;
+    return {std::move(wall), std::move(weight)};
 }
 
-// The spikes' own velocity [m/s] at each vertex of `now` (the displaced refined surface): the
-// displacement `earlier` gives the same refined surface, `interval` seconds before, against
-// now's, so the lattice's drift, a spike's growth and its fading all show, and the surface's
-// own motion does not (it is the same surface).
-std::vector<Vec3> spikeVelocity(const TriangleMesh& now, const SpikeInput& earlier, const SpikeParams& P, double Mc,
-                                const RefinedSurface& refined, double volumeIn, double interval)
+// How a tip moved over the interval before the frame: its drift along the surface [m/s] and the
+// relative rate its amplitude grows at [1/s].
+struct TipMotion {
+    Vec3d drift = Vec3d::Zero();
+    double growth = 0;
+};
+
+// Each tip of `patterns` found again in the lattice `earlier` gives, `interval` seconds before,
+// on the same surface, by its magnet and lattice coordinates (i, j); a tip not there earlier
+// grew from nothing over the interval. Without `earlier` (a field still over the spikes' whole
+// past) every tip stands still.
+std::vector<std::vector<TipMotion>> tipMotions(const std::vector<Pattern>& patterns, const SpikeInput* earlier,
+                                               const SpikeParams& P, double Mc, double interval)
 {
-    TriangleMesh before = refined.mesh;   // no spikes earlier: the undisplaced surface
+    std::vector<std::vector<TipMotion>> motion(patterns.size());
+    for (size_t p = 0; p < patterns.size(); ++p) motion[p].resize(patterns[p].tips.size());
+    if (!earlier) return motion;
+    const SurfaceFields fields(*earlier, P, Mc);
+    InputRegion region;
+    const std::vector<Pattern> before = tracePatterns(*earlier, P, fields, Mc, region);
+    std::map<std::tuple<int, int, int>, const Tip*> then;
+    for (const Pattern& pat : before)
+        for (const Tip& tip : pat.tips) then[{pat.info.magnet, tip.i, tip.j}] = &tip;
+    for (size_t p = 0; p < patterns.size(); ++p)
+        for (size_t t = 0; t < patterns[p].tips.size(); ++t) {
+            const Tip& tip = patterns[p].tips[t];
+            TipMotion& m = motion[p][t];
+            const auto it = then.find({patterns[p].info.magnet, tip.i, tip.j});
+            if (it != then.end()) {
+                m.drift = (tip.position - it->second->position) / interval;
+                if (tip.amplitude > 0) m.growth = (tip.amplitude - it->second->amplitude) / (interval * tip.amplitude);
+            } else if (tip.amplitude > 0) {
+                m.growth = 1.0 / interval;
+            }
+        }
+    return motion;
+}
+
+// The spiky surface's velocity [m/s] at each vertex of `now` (the refined surface displaced by
+// `patterns` with `weight`, the displacement's weight per vertex: 0 off the spikes, 1 on them).
+// The fluid's surface carries the spikes up and down, but along the surface they stand where
+// the field lays them out: on a spike the surface's velocity along the surface (refined
+// normals) gives way to the spike's own drift. The drift and the growth come from the nearby
+// tips, blended as the displacement blends them ((1 - d^2 / l^2)^3 times ownership, radius l);
+// the displacement scales with the tips' amplitude. So a pattern that slides with its magnet
+// slides, instead of rising and sinking in place as the displacement at a fixed surface point
+// would.
+std::vector<Vec3> spikyVelocities(const TriangleMesh& now, const RefinedSurface& refined,
+                                  const std::vector<Vec3>& surfaceVelocity, const std::vector<double>& weight,
+                                  const std::vector<Pattern>& patterns,
+                                  const std::vector<std::vector<TipMotion>>& motion)
+{
+    std::vector<Vec3> v(now.vertices.size());
+    tbb::parallel_for(size_t(0), v.size(), [&](size_t k) {
+        const Vec3d x = toD(refined.mesh.vertices[k]);
+        const Vec3d n = refined.normals[k];
+        Vec3d vs = toD(surfaceVelocity[k]);
+        vs -= weight[k] * (vs - vs.dot(n) * n);   // along the surface: the spikes' own drift instead
+        double W = 0, growth = 0;
+        Vec3d drift = Vec3d::Zero();
+        for (size_t p = 0; p < patterns.size(); ++p) {
+            const double l = patterns[p].info.spacing;
+            patterns[p].grid->forEachWithin(x, l, [&](uint32_t t, double d2) {
+                const double q = 1.0 - d2 / (l * l);
+                const double w = patterns[p].tips[t].ownership * q * q * q;
+                W += w;
+                drift += w * motion[p][t].drift;
+                growth += w * motion[p][t].growth;
+            });
+        }
+        if (W > 0) vs += weight[k] * drift / W + growth / W * (toD(now.vertices[k]) - x);
+        v[k] = vs.cast<Real>();
+    });
+    return v;
+}
+
+// The input surface's vertex velocities at `points` (on or next to the input surface): each
+// point takes its nearest input vertex's. Empty when the surface has none.
+std::vector<Vec3> surfaceVelocityAt(const TriangleMesh& surface, const std::vector<Vec3>& points)
+{
+    if (surface.velocities.size() != surface.vertices.size() || surface.vertices.empty()) return {};
+    const double edge = meanEdgeLength(surface);
+    std::vector<Vec3d> vertices(surface.vertices.size());
+    for (size_t i = 0; i < vertices.size(); ++i) vertices[i] = toD(surface.vertices[i]);
+    const HashGrid grid(vertices, edge > 0 ? std::max(2 * edge, 1e-9) : 1e-3);
+    std::vector<Vec3> out(points.size());
+    tbb::parallel_for(size_t(0), points.size(),
+                      [&](size_t i) { out[i] = surface.velocities[grid.nearest(toD(points[i]))]; });
+    return out;
+}
+
+// Added to `velocity` (per vertex of `surface`): the velocity of spikes that have gone, the
+// displacement `earlier` gave the surface undone over `interval` (they sink where they stood).
+void addSinkingVelocity(std::vector<Vec3>& velocity, const TriangleMesh& surface, const SpikeInput& earlier,
+                        const SpikeParams& P, double Mc, double volumeIn, double interval)
+{
     const SurfaceFields fields(earlier, P, Mc);
     InputRegion region;
-    const std::vector<Pattern> patterns = tracePatterns(earlier, P, fields, Mc, region);
-    if (!patterns.empty()) {
-        // A surface that has no spikes now was not refined: the wall fade's default spacing
-        // comes from the earlier patterns.
-        RefinedSurface on = refined;
-        if (!(on.minSpacing > 0)) {
-            on.minSpacing = std::numeric_limits<double>::infinity();
-            for (const Pattern& p : patterns) on.minSpacing = std::min(on.minSpacing, p.info.spacing);
-        }
-        displaceAndConserve(fields, patterns, earlier, P, on, volumeIn, before);
-    }
-    std::vector<Vec3> v(now.vertices.size());
-    for (size_t i = 0; i < v.size(); ++i) v[i] = ((now.vertices[i] - before.vertices[i]) / float(interval));
-    return v;
+    const std::vector<Pattern> before = tracePatterns(earlier, P, fields, Mc, region);
+    if (before.empty()) return;
+    RefinedSurface unrefined{surface, areaWeightedNormals(surface), std::numeric_limits<double>::infinity(), false};
+    for (const Pattern& p : before) unrefined.minSpacing = std::min(unrefined.minSpacing, p.info.spacing);
+    TriangleMesh then = surface;
+    displaceAndConserve(fields, before, earlier, P, unrefined, volumeIn, then);
+    for (size_t i = 0; i < velocity.size(); ++i) velocity[i] += (surface.vertices[i] - then.vertices[i]) / Real(interval);
 }
 
 } // namespace
@@ -339,7 +427,7 @@ SpikeResult addSpikes(const SpikeInput& in, const SpikeParams& P, const SpikeInp
     res.critical = criticalMagnetization(in.fluid.density - P.ambientDensity, g, in.fluid.surfaceTension, in.fluid.law);
     res.volumeIn = enclosedVolume(in.surface);
     const double Mc = res.critical.magnetization;
-    const bool motion = earlier && interval > 0;
+    const SpikeInput* before = interval > 0 ? earlier : nullptr;
     if (!P.enabled || in.magnets.empty() || !std::isfinite(Mc) || in.surface.empty())
         return unchangedResult(std::move(res), in.surface);
 
@@ -348,12 +436,10 @@ SpikeResult addSpikes(const SpikeInput& in, const SpikeParams& P, const SpikeInp
     InputRegion region;
     const std::vector<Pattern> patterns = tracePatterns(in, P, fields, Mc, region);
     if (patterns.empty()) {
-        // No spikes now; spikes that were there a moment ago sink at their own speed.
+        // No spikes now; spikes that were there a moment ago sink where they stood.
         res = unchangedResult(std::move(res), in.surface);
-        if (motion)
-            res.spikeVelocity = spikeVelocity(res.mesh, *earlier, P, Mc,
-                                              RefinedSurface{in.surface, areaWeightedNormals(in.surface), 0, false},
-                                              res.volumeIn, interval);
+        if (before && !res.mesh.velocities.empty())
+            addSinkingVelocity(res.mesh.velocities, in.surface, *before, P, Mc, res.volumeIn, interval);
         return res;
     }
 
@@ -362,13 +448,16 @@ SpikeResult addSpikes(const SpikeInput& in, const SpikeParams& P, const SpikeInp
     res.refinedOk = refined.remeshed;
 
     // 5-6. Heights and directions on the refined surface; the volume offset.
-    const WettedWall wall = displaceAndConserve(fields, patterns, in, P, refined, res.volumeIn, res.mesh);
+    const Displaced displaced = displaceAndConserve(fields, patterns, in, P, refined, res.volumeIn, res.mesh);
     res.volumeOut = enclosedVolume(res.mesh);
-    if (motion) res.spikeVelocity = spikeVelocity(res.mesh, *earlier, P, Mc, refined, res.volumeIn, interval);
+    const std::vector<Vec3> surfaceVelocity = surfaceVelocityAt(in.surface, refined.mesh.vertices);
+    if (!surfaceVelocity.empty())
+        res.mesh.velocities = spikyVelocities(res.mesh, refined, surfaceVelocity, displaced.weight, patterns,
+                                              tipMotions(patterns, before, P, Mc, interval));
     computeVertexNormals(res.mesh);
     res.refined = std::move(refined.mesh);
 
-    reportTips(SpikeSurface{fields, patterns, in.magnets, P, wall}, res);
+    reportTips(SpikeSurface{fields, patterns, in.magnets, P, displaced.wall}, res);
     return res;
 }
 

@@ -103,9 +103,6 @@ struct SpikeResult {
     double volumeIn = 0, volumeOut = 0; ///< enclosed volumes [m^3]
     double maxHeight = 0;            ///< largest tip height [m]
     bool refinedOk = true;           ///< false: the mesh was not a manifold CGAL could remesh
-    /// Per vertex of mesh: the spikes' own velocity over the surface they stand on [m/s]
-    /// (growing, sinking, the lattice drifting); empty unless addSpikes was given `earlier`.
-    std::vector<Vec3> spikeVelocity;
 };
 
 /// The field H [A/m] at x: the magnets plus, when given, the magnetized particles.
@@ -113,9 +110,13 @@ Vec3d totalFieldAt(const SpikeInput& input, const Vec3d& x);
 
 /// Synthesizes the spikes on input.surface. Deterministic: the same input gives the same
 /// output. Below M_c everywhere (or with spikes disabled) the surface is returned unchanged.
-/// With `earlier` (the same surface and particles, the magnets and their past `interval` [s]
-/// before: earlierSpikeInput) it also sets SpikeResult::spikeVelocity: the displacement now
-/// minus the one `earlier` gives on the same refined surface, over `interval`.
+/// When the input surface has vertex velocities, so does the result (mesh.velocities [m/s]):
+/// the surface's, except that along the surface the spikes move as their tips do (they stand
+/// where the field lays them out, not where the fluid flows), and their displacement grows
+/// with their tips' amplitude. How the tips moved comes from `earlier`: the same surface and
+/// particles with the magnets and their past `interval` [s] before (earlierSpikeInput), each
+/// tip found again there by its lattice coordinates; null = the tips stand still (a field
+/// still over the spikes' whole past).
 SpikeResult addSpikes(const SpikeInput& input, const SpikeParams& params, const SpikeInput* earlier = nullptr,
                       double interval = 0);
 
