@@ -53,7 +53,7 @@ PovScene parsePovScene(const SceneDocument& doc, int shotFirst, int shotLast, Po
     // every frame (scripts/shot.mk stamps the export with exactly the keys read here).
     PovScene scene;
     scene.shot.fps = parseShotFps(doc);
-    scene.shot.render = parseRenderMagnetSizes(doc);
+    scene.shot.render = parseRenderFrameParams(doc);
     scene.tracks = parseMagnets(doc);
     return scene;
 }
@@ -80,6 +80,15 @@ bool PovExporter::writeShotFiles(bool forceTemplate) const
     writeTextFile((dir / "shot.pov").string(), masterScene(shot_), true);
     writeTextFile((dir / "render.ini").string(), renderIni(shot_), true);
     writeTextFile((dir / "shot.ini").string(), shotIni(shot_), true);
+    // Motion blur's two passes, only while it is on (scripts/shot.mk renders through blur.ini
+    // when it is there).
+    for (const auto& [name, text] : {std::make_pair("blur.ini", blurIni(shot_)),
+                                     std::make_pair("average.ini", averageIni(shot_)),
+                                     std::make_pair("average.pov", averageScene(shot_))}) {
+        std::error_code gone;
+        if (shot_.render.motionBlur > 1) writeTextFile((dir / name).string(), text, true);
+        else fs::remove(dir / name, gone);
+    }
     std::error_code ec;
     fs::create_directories(dir / "frames", ec);
     const fs::path look = dir / "look.inc";
@@ -107,7 +116,7 @@ void PovExporter::exportFrame(const TriangleMesh& mesh, int frame) const
     if (!std::isfinite(time))
         time = frame / shot_.fps;
     const std::vector<Magnet> magnets = frameMagnets(mesh, tracks_, time);
-    writeTextFile(meshIncludePath(frame), meshInclude(mesh, frame));
+    writeTextFile(meshIncludePath(frame), meshInclude(mesh, frame, shot_.render.motionBlur > 1));
     writeTextFile(magnetIncludePath(frame), magnetInclude(magnets, shot_.render, frame, time));
 }
 

@@ -72,8 +72,10 @@ void appendVector(std::string& out, const Vec3d& v, int decimals);
 /// Text of mesh_NNNN.inc for `mesh` (Ferro coordinates). Vertex normals are written when the
 /// mesh has one per vertex, else computed from the triangles. An empty mesh gives a file that
 /// declares FerroMeshTriangles = 0 and no FerroMesh (POV-Ray rejects a mesh2 without faces).
-/// Throws MeshFileError for an out-of-range index or a non-finite vertex.
-std::string meshInclude(const TriangleMesh& mesh, int frame);
+/// Throws MeshFileError for an out-of-range index or a non-finite vertex. With `motion` and a
+/// velocity per vertex, each vertex is written as its position plus FerroShift [s] times its
+/// velocity (FerroShift 0 unless the scene declares it: motion blur's sub-frames).
+std::string meshInclude(const TriangleMesh& mesh, int frame, bool motion = false);
 
 /// The magnets at a frame: the ones in the mesh's header comments (`comment magnet_count`,
 /// copied by every stage from the particle file) if there are any, else `tracks` at `time`.
@@ -106,6 +108,12 @@ ShotDescription describeShot(const SceneDocument& doc, int first = -1, int last 
 std::string masterScene(const ShotDescription& shot);
 std::string renderIni(const ShotDescription& shot);
 std::string shotIni(const ShotDescription& shot);
+/// Motion blur (render.motion_blur > 1): blur.ini renders a frame's sub-frames (an animation
+/// of motion_blur frames whose clock runs -0.5 .. 0.5 over the shutter, into sub/), and
+/// average.ini / average.pov average them into the frame (in linear light).
+std::string blurIni(const ShotDescription& shot);
+std::string averageIni(const ShotDescription& shot);
+std::string averageScene(const ShotDescription& shot);
 std::string lookTemplate();
 
 /// Writes `text` to `path` atomically (temporary file + rename). With `onlyIfChanged`, a file

@@ -38,7 +38,7 @@ std::vector<Vec3> vertexNormals(const TriangleMesh& mesh)
 
 } // namespace
 
-std::string meshInclude(const TriangleMesh& mesh, int frame)
+std::string meshInclude(const TriangleMesh& mesh, int frame, bool motion)
 {
     const size_t nv = mesh.vertices.size(), nt = mesh.triangles.size();
     std::string out;
@@ -68,10 +68,19 @@ std::string meshInclude(const TriangleMesh& mesh, int frame)
     out += "#declare FerroMeshMin = " + vec(lo, kPositionDecimals) + ";\n";
     out += "#declare FerroMeshMax = " + vec(hi, kPositionDecimals) + ";\n";
 
+    // Motion blur's sub-frames move each vertex along its velocity (mm/s here) by FerroShift
+    // seconds; POV-Ray evaluates the sum once per vertex as it parses.
+    const bool moving = motion && mesh.velocities.size() == nv;
+    if (moving)
+        out += "#ifndef (FerroShift) #declare FerroShift = 0; #end   // [s] from the frame's time\n";
     out += "#declare FerroMesh = mesh2 {\n vertex_vectors { " + std::to_string(nv);
-    for (const Vec3& v : mesh.vertices) {
+    for (size_t i = 0; i < nv; ++i) {
         out += ",\n";
-        appendVector(out, toPovPoint(v.cast<double>()), kPositionDecimals);
+        appendVector(out, toPovPoint(mesh.vertices[i].cast<double>()), kPositionDecimals);
+        if (moving) {
+            out += "+FerroShift*";
+            appendVector(out, toPovPoint(mesh.velocities[i].cast<double>()), kPositionDecimals);
+        }
     }
     const std::vector<Vec3> normals = vertexNormals(mesh);
     out += "\n }\n normal_vectors { " + std::to_string(nv);

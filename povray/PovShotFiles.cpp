@@ -134,6 +134,13 @@ std::string masterScene(const ShotDescription& shot)
         s << "#declare FerroContainerType = \"none\";\n";
         break;
     }
+    if (r.motionBlur > 1)
+        s << "\n// Motion blur ([render] motion_blur, shutter): blur.ini renders FerroMotionBlur\n"
+             "// sub-frames whose clock runs -0.5 .. 0.5; each moves the meshes along their\n"
+             "// velocities by FerroShift seconds, and average.ini averages them into the frame.\n"
+          << "#declare FerroMotionBlur = " << r.motionBlur << ";\n"
+          << "#declare FerroShutter = " << number(r.shutter) << ";   // of the frame interval\n"
+          << "#ifdef (FerroBlur) #declare FerroShift = clock * FerroShutter / FerroFps; #end\n";
     s << "\n// The frame's data: FerroMesh (if the surface has triangles) and the magnets.\n"
          "#include concat(\"mesh_\", str(FerroFrame, -4, 0), \".inc\")\n"
          "#include concat(\"magnets_\", str(FerroFrame, -4, 0), \".inc\")\n\n"
@@ -177,6 +184,68 @@ std::string shotIni(const ShotDescription& shot)
       << "Final_Clock=" << number(shot.lastFrame / shot.fps) << "\n"
       << "Cyclic_Animation=off\n"
       << "Output_File_Name=frames/shot_\n";
+    return s.str();
+}
+
+namespace {
+int digits(int n) { return int(std::to_string(n).size()); }
+} // namespace
+
+std::string blurIni(const ShotDescription& shot)
+{
+    const int n = shot.render.motionBlur;
+    std::ostringstream s;
+    s << "; blur.ini: one frame's motion blur sub-frames, written by ferro-pov while\n"
+         "; render.motion_blur > 1. Frame 12: povray blur.ini Declare=FerroFrame=12 +Osub/frame_0012_.png\n"
+         "; (sub/frame_0012_" << std::string(size_t(digits(n) - 1), '0') << "1.png ...), then\n"
+         "; povray average.ini Declare=FerroFrame=12 +Oframe_0012.png. scripts/shot.mk does both.\n"
+         "render.ini\n"
+         "Declare=FerroBlur=1\n"
+      << "Initial_Frame=1\n"
+      << "Final_Frame=" << n << "\n"
+      << "Initial_Clock=-0.5\n"
+      << "Final_Clock=0.5\n"
+      << "Cyclic_Animation=off\n";
+    return s.str();
+}
+
+std::string averageIni(const ShotDescription& shot)
+{
+    std::ostringstream s;
+    s << "; average.ini: the mean of a frame's motion blur sub-frames (average.pov), written by\n"
+         "; ferro-pov while render.motion_blur > 1: povray average.ini Declare=FerroFrame=12 +Oframe_0012.png\n"
+         "render.ini\n"
+         "Input_File_Name=average.pov\n"
+         "Antialias=off\n"
+         "Quality=0\n";
+    (void)shot;
+    return s.str();
+}
+
+std::string averageScene(const ShotDescription& shot)
+{
+    const int n = shot.render.motionBlur;
+    std::ostringstream s;
+    s << "// average.pov: the mean of frame FerroFrame's sub-frames sub/frame_NNNN_K.png, written by\n"
+         "// ferro-pov while render.motion_blur > 1. Each sub-frame is an image map on the unit\n"
+         "// square, seen by an orthographic camera pixel for pixel; the maps are averaged in\n"
+         "// linear light (assumed_gamma 1) and the result is encoded like any render.\n"
+         "#version 3.7;\n"
+         "global_settings { assumed_gamma 1.0 }\n"
+         "#ifndef (FerroFrame) #declare FerroFrame = 0; #end\n"
+      << "#declare FerroSubframes = " << n << ";\n"
+      << "#declare FerroSubDigits = " << digits(n) << ";\n"
+      << "camera { orthographic location <0.5, 0.5, -1> look_at <0.5, 0.5, 0> right x up y }\n"
+         "plane { z, 0\n"
+         "  texture {\n"
+         "    pigment { average pigment_map {\n"
+         "      #for (K, 1, FerroSubframes)\n"
+         "        [1 image_map { png concat(\"sub/frame_\", str(FerroFrame, -4, 0), \"_\", str(K, -FerroSubDigits, 0), \".png\") once }]\n"
+         "      #end\n"
+         "    } }\n"
+         "    finish { emission 1 diffuse 0 ambient 0 specular 0 }\n"
+         "  }\n"
+         "}\n";
     return s.str();
 }
 

@@ -10,18 +10,20 @@ namespace ferro {
 
 namespace {
 
-void readMagnetSizes(const TableReader& r, RenderParams& p)
+// The keys the per-frame includes read (PovExport's FramesOnly scene).
+void readFrameKeys(const TableReader& r, RenderParams& p)
 {
     p.magnetLength = r.positive("magnet_length", p.magnetLength);
     p.magnetRadius = r.positive("magnet_radius", p.magnetRadius);
+    p.motionBlur = r.integerInRange("motion_blur", p.motionBlur, 0, 64);
 }
 
 } // namespace
 
-RenderParams parseRenderMagnetSizes(const SceneDocument& doc)
+RenderParams parseRenderFrameParams(const SceneDocument& doc)
 {
     RenderParams p;
-    readMagnetSizes(doc.section("render"), p);
+    readFrameKeys(doc.section("render"), p);
     return p;
 }
 
@@ -51,7 +53,9 @@ RenderParams parseRenderParams(const SceneDocument& doc)
     p.antialiasThreshold = r.positive("antialias_threshold", p.antialiasThreshold);
     p.antialiasDepth = r.integerInRange("antialias_depth", p.antialiasDepth, 1, 9);
     p.lightSamples = r.integerInRange("light_samples", p.lightSamples, 1, 9);
-    readMagnetSizes(r, p);
+    readFrameKeys(r, p);
+    p.shutter = r.positive("shutter", p.shutter);
+    if (p.shutter > 1) r.fail("shutter", "must be in (0, 1]: a fraction of the frame interval (got " + std::to_string(p.shutter) + ")");
     r.finish();
     return p;
 }

@@ -28,12 +28,19 @@ struct RenderParams {
     /// their pole distance as length, loops their radius.
     double magnetLength = 0.02;               ///< [m], > 0
     double magnetRadius = 0.006;              ///< [m], > 0
+    /// Motion blur: each frame the mean of this many sub-frame renders, the meshes moved along
+    /// their vertex velocities across the shutter (blur.ini, average.ini); 0 or 1 = off, 0..64.
+    int motionBlur = 0;
+    /// The shutter's open time as a fraction of the frame interval (0.5: a 180-degree shutter),
+    /// centred on the frame's time; (0, 1].
+    double shutter = 0.5;
 };
 
 /// Parses [render] (absent section = all defaults). Throws SceneError on a bad or unknown key.
 RenderParams parseRenderParams(const SceneDocument& doc);
-/// Only render.magnet_length and render.magnet_radius (the rest default, no unknown-key
-/// check): what the per-frame magnet includes need. Throws SceneError on a bad value.
-RenderParams parseRenderMagnetSizes(const SceneDocument& doc);
+/// Only what the per-frame includes need (the rest default, no unknown-key check): the
+/// magnets' display sizes, and motion_blur (whether meshes carry their velocities). Throws
+/// SceneError on a bad value.
+RenderParams parseRenderFrameParams(const SceneDocument& doc);
 
 } // namespace ferro

@@ -154,11 +154,21 @@ shot/shot.pov: .scene/render.toml
 shot/look.inc: | shot/shot.pov
 	$(FERRO_BIN)/ferro-pov --scene '$(SCENE)' --out shot --shot-frames $(SHOT_FIRST):$(SHOT_LAST) --quiet $(SETS)
 
+# With motion blur (render.motion_blur > 1, ferro-pov writes blur.ini) a frame is the mean of
+# its sub-frames: blur.ini renders them into shot/sub/, average.ini averages them.
 png/frame_%.png: shot/mesh_%.inc shot/magnets_%.inc shot/shot.pov shot/look.inc
-	@mkdir -p png shot/log
-	cd shot && $(POVRAY) render.ini -D Declare=FerroFrame=$(call frame_number,$*) \
-	  +O../png/.frame_$*.tmp.png $(if $(THREADS),+WT$(THREADS)) $(POVRAY_ARGS) > log/frame_$*.log 2>&1 \
-	  || { tail -n 20 log/frame_$*.log >&2; rm -f ../png/.frame_$*.tmp.png; exit 1; }
+	@mkdir -p png shot/log shot/sub
+	cd shot && { if [ -f blur.ini ]; then \
+	    $(POVRAY) blur.ini -D Declare=FerroFrame=$(call frame_number,$*) +Osub/frame_$*_.png \
+	      $(if $(THREADS),+WT$(THREADS)) $(POVRAY_ARGS) && \
+	    $(POVRAY) average.ini -D Declare=FerroFrame=$(call frame_number,$*) +O../png/.frame_$*.tmp.png \
+	      $(if $(THREADS),+WT$(THREADS)); \
+	  else \
+	    $(POVRAY) render.ini -D Declare=FerroFrame=$(call frame_number,$*) +O../png/.frame_$*.tmp.png \
+	      $(if $(THREADS),+WT$(THREADS)) $(POVRAY_ARGS); \
+	  fi; } > log/frame_$*.log 2>&1 \
+	  || { tail -n 20 log/frame_$*.log >&2; rm -f ../png/.frame_$*.tmp.png sub/frame_$*_*.png; exit 1; }
+	rm -f shot/sub/frame_$*_*.png
 	mv -f png/.frame_$*.tmp.png $@
 
 # ---- Video --------------------------------------------------------------------------------------

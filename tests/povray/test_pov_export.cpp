@@ -151,6 +151,18 @@ TEST_CASE("[render] defaults, overrides and unknown keys", "[pov]")
     CHECK(shotIni(shot).find("Final_Frame=5\n") != std::string::npos);
     CHECK(shotIni(shot).find("Final_Clock=0.5\n") != std::string::npos);
     CHECK(masterScene(shot).find("#declare FerroDishRadius = 50;") != std::string::npos);
+
+    // Motion blur: off by default (nothing of it in the shot files), 0..64 sub-frames, a
+    // shutter in (0, 1].
+    CHECK(def.motionBlur == 0);
+    CHECK(def.shutter == 0.5);
+    CHECK(masterScene(shot).find("FerroShift") == std::string::npos);
+    CHECK_THROWS_WITH(parseRenderParams(SceneDocument::parse(dishScene("[render]\nmotion_blur = 65\n"), "s.toml")),
+                      Catch::Contains("render.motion_blur"));
+    CHECK_THROWS_WITH(parseRenderParams(SceneDocument::parse(dishScene("[render]\nshutter = 1.5\n"), "s.toml")),
+                      Catch::Contains("render.shutter: must be in (0, 1]"));
+    CHECK_THROWS_WITH(parseRenderParams(SceneDocument::parse(dishScene("[render]\nshutter = 0\n"), "s.toml")),
+                      Catch::Contains("render.shutter"));
 }
 
 TEST_CASE("magnets come from the mesh header, else from the scene's tracks", "[pov]")
@@ -276,4 +288,90 @@ TEST_CASE("povray shot.ini renders a frame range through POV-Ray's animation opt
     CHECK(fs::exists(dir / "frames" / "shot_3.png"));
     CHECK_FALSE(fs::exists(dir / "frames" / "shot_1.png"));
     CHECK_FALSE(fs::exists(dir / "frames" / "shot_4.png"));
+}
+
+namespace {
+// sRGB's transfer: 8-bit code <-> linear light.
+double srgbToLinear(int c)
+{
+    const double v = c / 255.0;
+    return v <= 0.04045 ? v / 12.92 : std::pow((v + 0.055) / 1.055, 2.4);
+}
+double linearToSrgb(double l)
+{
+    return 255.0 * (l <= 0.0031308 ? 12.92 * l : 1.055 * std::pow(l, 1 / 2.4) - 0.055);
+}
+} // namespace
+
+TEST_CASE("motion blur: each sub-frame is the mesh moved along its velocity over the shutter, the frame their mean in linear light",
+          "[pov][povray][blur]")
+{
+    // A black ball crossing the view at 0.2 m/s, shutter 1 (the whole frame interval, 0.1 s at
+    // 10 fps), three sub-frames: the ball at -1 cm, 0 and +1 cm of its frame position. The
+    // references are sharp renders of the ball placed there by hand.
+    const std::string blurred = "[render]\nmotion_blur = 3\nshutter = 1.0\nantialias = false\n";
+    const fs::path dir = freshDir("blur"), ref = freshDir("blur-reference");
+    const SceneDocument doc = SceneDocument::parse(dishScene(blurred), (dir / "scene.toml").string());
+    const PovExporter exporter(doc, dir.string());
+    exporter.writeShotFiles(false);
+    for (const char* f : {"blur.ini", "average.ini", "average.pov"}) REQUIRE(fs::exists(dir / f));
+    const Vec3 ball(0.0f, 0.0f, 0.03f), velocity(0.2f, 0.0f, 0.0f);
+    TriangleMesh mesh = sphereMesh(ball, 0.01f, 24, 12);
+    mesh.velocities.assign(mesh.vertices.size(), velocity);
+    exporter.exportFrame(mesh, 2);
+    CHECK(slurp(dir / "mesh_0002.inc").find("+FerroShift*<200,0,0>") != std::string::npos);   // mm/s, y up
+
+    const int W = 48, H = 36;
+    const std::string size = " +W" + std::to_string(W) + " +H" + std::to_string(H);
+    fs::create_directories(dir / "sub");
+    Result res = run("cd '" + dir.string() + "' && povray blur.ini -D Declare=FerroFrame=2 +FP" + size + " +Osub/frame_0002_.ppm");
+    INFO(res.output);
+    REQUIRE(res.code == 0);
+
+    const PovExporter sharp(SceneDocument::parse(dishScene("[render]\nantialias = false\n"), (ref / "scene.toml").string()),
+                            ref.string());
+    sharp.writeShotFiles(false);
+    std::vector<Image> refs;
+    for (int k = 0; k < 3; ++k) {
+        const float shift = (-0.5f + 0.5f * k) * 0.1f;   // clock -0.5 .. 0.5 times the shutter's 0.1 s
+        sharp.exportFrame(sphereMesh(ball + shift * velocity, 0.01f, 24, 12), 2);
+        REQUIRE(renderFrame(ref, 2, W, H, "ref" + std::to_string(k)).code == 0);
+        refs.push_back(readPpm(ref / ("ref" + std::to_string(k) + ".ppm")));
+        const Image sub = readPpm(dir / "sub" / ("frame_0002_" + std::to_string(k + 1) + ".ppm"));
+        REQUIRE(sub.rgb.size() == refs[k].rgb.size());
+        size_t differ = 0;
+        for (size_t i = 0; i < sub.rgb.size(); ++i) differ += std::abs(int(sub.rgb[i]) - int(refs[k].rgb[i])) > 2;
+        INFO("sub-frame " << k + 1 << ": " << differ << " of " << sub.rgb.size() << " values differ from the sharp render");
+        CHECK(differ < sub.rgb.size() / 200);   // only where the positions' rounding tips an edge pixel
+    }
+    // The sub-frames differ from each other: the ball moved.
+    CHECK(refs[0].rgb != refs[2].rgb);
+
+    // The frame: the three sub-frames (as PNG, what shot.mk renders) averaged by average.ini.
+    res = run("cd '" + dir.string() + "' && povray blur.ini -D Declare=FerroFrame=2" + size +
+              " +Osub/frame_0002_.png && povray average.ini -D Declare=FerroFrame=2 +FP" + size + " +Oblur.ppm");
+    INFO(res.output);
+    REQUIRE(res.code == 0);
+    const Image frame = readPpm(dir / "blur.ppm");
+    REQUIRE(frame.rgb.size() == refs[0].rgb.size());
+    double meanError = 0;
+    size_t far = 0;
+    for (size_t i = 0; i < frame.rgb.size(); ++i) {
+        const double expected =
+            linearToSrgb((srgbToLinear(refs[0].rgb[i]) + srgbToLinear(refs[1].rgb[i]) + srgbToLinear(refs[2].rgb[i])) / 3);
+        const double e = std::abs(frame.rgb[i] - expected);
+        meanError += e / frame.rgb.size();
+        far += e > 3;
+    }
+    INFO("mean error " << meanError << " levels, " << far << " values more than 3 levels off");
+    CHECK(meanError < 0.6);
+    CHECK(far < frame.rgb.size() / 100);
+
+    // Turned off again, the blur files go and the meshes are written as before.
+    const PovExporter off(SceneDocument::parse(dishScene(), (dir / "scene.toml").string()), dir.string());
+    off.writeShotFiles(false);
+    off.exportFrame(mesh, 2);
+    CHECK_FALSE(fs::exists(dir / "blur.ini"));
+    CHECK_FALSE(fs::exists(dir / "average.pov"));
+    CHECK(slurp(dir / "mesh_0002.inc").find("FerroShift") == std::string::npos);
 }
