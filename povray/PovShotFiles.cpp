@@ -6,6 +6,7 @@
 #include "sim/magnets/MagnetState.hpp"
 #include "sim/core/ParticleFile.hpp"
 #include "sim/core/SceneDocument.hpp"
+#include "sim/core/TriangleMesh.hpp"
 #include "sim/magnets/MagnetScene.hpp"
 #include "sim/scene/SimSceneFile.hpp"
 
@@ -56,6 +57,16 @@ ShotDescription describeShot(const SceneDocument& doc, int first, int last)
             const Vec3d bhi = box ? b.max : Vec3d(b.center + Vec3d(b.radius, b.radius, b.height));
             lo = lo.cwiseMin(blo);
             hi = hi.cwiseMax(bhi);
+        }
+        // A mesh vessel: the set spans it too, and the floor goes under it (fluid poured into
+        // a cup ends below the block it was poured from).
+        if (c.type == ContainerParams::Type::Mesh) {
+            const TriangleMesh vessel = readMesh(c.meshFile);
+            for (const Vec3& v : vessel.vertices) {
+                const Vec3d p = c.meshScale * v.cast<double>() + c.meshTranslate;
+                lo = lo.cwiseMin(p);
+                hi = hi.cwiseMax(p);
+            }
         }
         shot.setCenter = Vec3d(0.5 * (lo.x() + hi.x()), 0.5 * (lo.y() + hi.y()), lo.z());
         shot.setRadius = std::max(0.5 * (hi - lo).head<2>().norm(), 1e-3);
