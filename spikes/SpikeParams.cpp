@@ -18,27 +18,18 @@ SpikeParams parseSpikeParams(const SceneDocument& doc)
     if (p.maxSpacing < p.minSpacing)
         r.fail("max_spacing", "must be >= min_spacing");
     p.maxAspect = r.positive("max_aspect", p.maxAspect);
-    p.sharpness = r.number("sharpness", p.sharpness);
-    if (!(p.sharpness >= 1.0 && p.sharpness <= 8.0))
-        r.fail("sharpness", "must be in [1, 8]");
+    p.sharpness = r.numberInRange("sharpness", p.sharpness, 1, 8);
     p.magnetizationFade = r.positive("magnetization_fade", p.magnetizationFade);
     p.growthTime = r.nonNegative("growth_time", p.growthTime);
     p.wallMargin = r.nonNegative("wall_margin", p.wallMargin);
     p.wallFade = r.nonNegative("wall_fade", p.wallFade);
-    p.resolution = r.number("resolution", p.resolution);
-    if (!(p.resolution >= 3.0 && p.resolution <= 100.0))
-        r.fail("resolution", "must be in [3, 100]");
-    const long iterations = r.integer("remesh_iterations", p.remeshIterations);
-    if (iterations < 0 || iterations > 20)
-        r.fail("remesh_iterations", "must be in [0, 20]");
-    p.remeshIterations = int(iterations);
+    p.resolution = r.numberInRange("resolution", p.resolution, 3, 100);
+    p.remeshIterations = r.integerInRange("remesh_iterations", p.remeshIterations, 0, 20);
     p.ambientDensity = r.nonNegative("ambient_density", p.ambientDensity);
     p.hasOrigin = r.has("origin");
     p.origin = r.vec3("origin", p.origin);
     p.orientation = r.number("orientation", p.orientation);
-    p.maxTilt = r.number("max_tilt", p.maxTilt);
-    if (!(p.maxTilt >= 0.0 && p.maxTilt <= 80.0))
-        r.fail("max_tilt", "must be in [0, 80] degrees");
+    p.maxTilt = r.numberInRange("max_tilt", p.maxTilt, 0, 80);   // degrees
     p.particleField = r.boolean("particle_field", p.particleField);
     p.conserveVolume = r.boolean("conserve_volume", p.conserveVolume);
     r.finish();

@@ -43,6 +43,8 @@ public:
     long integer(const std::string& key, long def) const;
     /// An integer in [lo, hi].
     int integerInRange(const std::string& key, int def, long lo, long hi) const;
+    /// A number in [lo, hi].
+    double numberInRange(const std::string& key, double def, double lo, double hi) const;
     bool boolean(const std::string& key, bool def) const;
     std::string string(const std::string& key, const std::string& def) const;
     std::string string(const std::string& key) const;                 ///< required

@@ -157,6 +157,15 @@ int TableReader::integerInRange(const std::string& key, int def, long lo, long h
     return static_cast<int>(v);
 }
 
+double TableReader::numberInRange(const std::string& key, double def, double lo, double hi) const
+{
+    const double v = number(key, def);
+    if (!(v >= lo && v <= hi))
+        fail(key, "must be in [" + formatNumber(lo) + ", " + formatNumber(hi) + "] (got " + formatNumber(v) + ")");
+    spec(key, "number in [" + formatNumber(lo) + ", " + formatNumber(hi) + "]", formatNumber(def));
+    return v;
+}
+
 Vec3d TableReader::unitVector(const std::string& key, const Vec3d& def) const
 {
     const Vec3d d = vec3(key, def);

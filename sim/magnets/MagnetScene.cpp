@@ -76,13 +76,11 @@ MagnetizationParams parseMagnetization(const SceneDocument& doc)
              : solver == "direct" ? MagnetizationParams::Solver::Direct
              : solver == "tree" ? MagnetizationParams::Solver::Tree : MagnetizationParams::Solver::Auto;
     p.tolerance = r.positive("tolerance", p.tolerance);
-    p.openingAngle = r.number("opening_angle", p.openingAngle);
     // The tree clamps the angle to [0.05, 1] (DipoleTree::build); a value outside used to be
     // changed without a word. Above 1 cells as large as their distance would be expanded
     // (1.0 already gives 0.3 % RMS field error on a settled pool, tests/bench/report); below
     // 0.05 it is the direct sum at a tree's overhead.
-    if (!(p.openingAngle >= 0.05 && p.openingAngle <= 1))
-        r.fail("opening_angle", "must be in [0.05, 1] (got " + formatNumber(p.openingAngle) + ")");
+    p.openingAngle = r.numberInRange("opening_angle", p.openingAngle, 0.05, 1);
     p.smoothing = r.number("smoothing", p.smoothing);
     if (!(p.smoothing == 0 || (p.smoothing >= 1 && p.smoothing <= 6)))
         r.fail("smoothing", "must be 0 (uniformly magnetized spheres) or in [1, 6] particle spacings (got " +

@@ -155,9 +155,7 @@ SolverParams parseSolver(const SceneDocument& doc)
     p.pressureIteration = r.choice("pressure_iteration", {"jacobi", "cg"}, "jacobi") == "cg"
                               ? SolverParams::PressureIteration::ConjugateGradient
                               : SolverParams::PressureIteration::Jacobi;
-    p.artificialViscosity = r.number("artificial_viscosity", p.artificialViscosity);
-    if (!(p.artificialViscosity >= 0 && p.artificialViscosity <= 1))
-        r.fail("artificial_viscosity", "must be in [0, 1] (got " + formatNumber(p.artificialViscosity) + ")");
+    p.artificialViscosity = r.numberInRange("artificial_viscosity", p.artificialViscosity, 0, 1);
     p.viscosityTolerance = r.number("viscosity_tolerance", p.viscosityTolerance);
     if (!(p.viscosityTolerance > 0 && p.viscosityTolerance < 1))
         r.fail("viscosity_tolerance", "must be in (0, 1) (got " + formatNumber(p.viscosityTolerance) + ")");
