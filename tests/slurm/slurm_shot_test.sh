@@ -125,18 +125,7 @@ for f in $(seq 0 10); do
   for file in surface/surface_$tag.ply spiky/spiky_$tag.ply shot/mesh_$tag.inc shot/magnets_$tag.inc; do
     cmp -s "$scratch/local/$file" "$out/$file" || fail "$file differs from the local run"
   done
-  python3 - "$scratch/local/png/frame_$tag.png" "$out/png/frame_$tag.png" <<'PY' || fail "frame $f: PNG pixels differ"
-import struct, sys, zlib
-def pixels(path):  # the image header and the decompressed pixel rows, not the text chunks
-    data, i, head, idat = open(path, 'rb').read(), 8, b'', b''
-    while i < len(data):
-        n = struct.unpack('>I', data[i:i + 4])[0]
-        kind, body = data[i + 4:i + 8], data[i + 8:i + 8 + n]
-        if kind == b'IHDR': head = body
-        if kind == b'IDAT': idat += body
-        i += 12 + n
-    return head, zlib.decompress(idat)
-sys.exit(0 if pixels(sys.argv[1]) == pixels(sys.argv[2]) else 1)
-PY
+  python3 "$src/tests/tools/pngcheck.py" same "$scratch/local/png/frame_$tag.png" "$out/png/frame_$tag.png" \
+    || fail "frame $f: PNG pixels differ"
 done
 echo "PASS: Slurm shot: requeued simulation resumed after frame $resumed, cancelled frame 2 filled in alone, 11 frames equal the local run"
