@@ -546,6 +546,18 @@ struct BallErrors {
     MagnetizationSolver::Stats stats;
 };
 
+// The ball cases' targets against the analytic interior field (issue's accuracy): a converged
+// solve, the interior field within 2 % mean, 3 % RMS and 10 % worst.
+void requireBallTargets(const BallErrors& e, const char* what)
+{
+    INFO(what << ": interior " << e.interior << ", mean " << e.mean << ", rms " << e.rms << ", worst " << e.worst
+              << ", " << e.stats.iterations << " evaluations, residual " << e.stats.residual);
+    REQUIRE(e.stats.converged);
+    REQUIRE(e.mean < 0.02);
+    REQUIRE(e.rms < 0.03);
+    REQUIRE(e.worst < 0.10);
+}
+
 // Solves the ball (any particle set of one spacing) in H0 along z and compares the field of
 // its interior particles with the analytic H_in. The ball's radius is its volume's,
 // R = (3 sum V / 4 pi)^(1/3), about the volume centroid; interior = at least `margin` [m]
@@ -619,23 +631,15 @@ TEST_CASE("Settled SPH ball in a uniform field: every interior particle has the 
     REQUIRE(x.size() == 3615);
     for (const BallCase& c : kBallCases) {
         const BallErrors e = ballErrors(x, V, params(Solver::Direct, c.chi0, c.Ms, 1e-3), kBallH0, interiorMargin(s));
-        INFO("chi0 " << c.chi0 << " Ms " << c.Ms << ": interior " << e.interior << ", mean " << e.mean << ", rms "
-                     << e.rms << ", worst " << e.worst << ", " << e.stats.iterations << " evaluations, residual "
-                     << e.stats.residual);
+        INFO("chi0 " << c.chi0 << " Ms " << c.Ms);
         REQUIRE(e.interior > 1000);
-        REQUIRE(e.stats.converged);
         REQUIRE(e.stats.residual <= 1e-4);
-        REQUIRE(e.mean < 0.02);
-        REQUIRE(e.rms < 0.03);
-        REQUIRE(e.worst < 0.10);
+        requireBallTargets(e, "direct");
     }
     // The tree converges to the same accuracy (chi0 = 10, the hardest case).
     const BallErrors t = ballErrors(x, V, params(Solver::Tree, 10, 0, 1e-3), kBallH0, interiorMargin(s));
-    INFO("tree: mean " << t.mean << ", rms " << t.rms << ", worst " << t.worst << ", residual " << t.stats.residual);
     REQUIRE(t.stats.solver == Solver::Tree);
-    REQUIRE(t.stats.converged);
-    REQUIRE(t.rms < 0.03);
-    REQUIRE(t.worst < 0.10);
+    requireBallTargets(t, "tree");
     // The uniformly-magnetized-sphere model (smoothing = 0) is far off on the same ball: its
     // near-neighbour sums cancel only on a cubic lattice, and a settled SPH state is a
     // disordered, slightly compressed one (11-12 % RMS at chi0 = 1).
@@ -658,30 +662,21 @@ TEST_CASE("Jittered ball in a uniform field: interior field per particle, conver
         MagnetizationParams p = params(Solver::Direct, c.chi0, c.Ms, 1e-3);
         p.localCorrection = true;
         const BallErrors e = ballErrors(x, V, p, kBallH0, interiorMargin(s));
-        INFO("chi0 " << c.chi0 << " Ms " << c.Ms << ": interior " << e.interior << ", mean " << e.mean << ", rms "
-                     << e.rms << ", worst " << e.worst << ", " << e.stats.iterations << " evaluations, residual "
-                     << e.stats.residual);
+        INFO("chi0 " << c.chi0 << " Ms " << c.Ms);
         REQUIRE(e.interior > 1500);
-        REQUIRE(e.stats.converged);
-        REQUIRE(e.stats.residual <= 1e-4);
         // Reference: the analytic interior field of a uniformly magnetized sphere (ballErrors).
         // Bounds: the issue's targets, met with the local correction (off by default in the
         // simulation); measured with and without it: docs/physics/magnetization.md, "Tested
         // accuracy".
-        REQUIRE(e.mean < 0.02);
-        REQUIRE(e.rms < 0.03);
-        REQUIRE(e.worst < 0.10);
+        REQUIRE(e.stats.residual <= 1e-4);
+        requireBallTargets(e, "direct, local correction");
     }
     // Tree (chi0 = 10, the hardest case): the correction measured with the tree's own sums.
     MagnetizationParams pt = params(Solver::Tree, 10, 0, 1e-3);
     pt.localCorrection = true;
     const BallErrors t = ballErrors(x, V, pt, kBallH0, interiorMargin(s));
-    INFO("tree: mean " << t.mean << ", rms " << t.rms << ", worst " << t.worst << ", residual " << t.stats.residual);
     REQUIRE(t.stats.solver == Solver::Tree);
-    REQUIRE(t.stats.converged);
-    REQUIRE(t.mean < 0.02);
-    REQUIRE(t.rms < 0.03);
-    REQUIRE(t.worst < 0.10);
+    requireBallTargets(t, "tree, local correction");
 }
 
 namespace {
