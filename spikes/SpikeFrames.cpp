@@ -247,8 +247,8 @@ bool earlierSpikeInput(const SpikeScene& scene, const SpikeInput& in, double int
     }
     // The spikes' past reaches 4 growth times back: a field that has been still over all of
     // it and the interval gives the same spikes (their own velocity is zero).
-    if (!moved && !in.pastMagnets.empty()) {
-        const double tau = scene.params.growthTime;
+    const double tau = scene.params.growthTime;
+    if (!moved && !in.pastMagnets.empty() && tau > 0) {
         for (double back = 0; back <= 4 * tau + interval && !moved; back += tau / 4)
             for (const MagnetTrack& track : scene.magnets) {
                 const Magnet a = track.at(in.time - back), b = track.at(in.time - back - interval);
@@ -280,8 +280,8 @@ SpikeResult spikeFrame(const SpikeScene& scene, const std::string& surfacePath, 
 {
     refuseToOverwriteInputs("--out", outPath, {surfacePath, particlePath});
     const SpikeInput in = loadSpikeInput(scene, surfacePath, particlePath, frameHint);
-    // A mesh with velocities gets the spikes' own motion too: their displacement against the
-    // one a frame earlier on the same surface (the motion a frame's renders blur over).
+    // A mesh with velocities gets the spikes' own motion too: how their tips moved since a
+    // frame interval earlier (the motion a frame's renders blur over).
     const double interval = 1.0 / scene.fps;
     SpikeInput earlier;
     const bool motion = !in.surface.velocities.empty() && earlierSpikeInput(scene, in, interval, earlier);
