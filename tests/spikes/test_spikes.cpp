@@ -477,7 +477,7 @@ TEST_CASE("the spikes' own velocity is the rate of their displacement: a field r
     REQUIRE(written.velocities == res.mesh.velocities);
 }
 
-TEST_CASE("spikes in a still field stand where the field lays them out while the fluid slides under them; elsewhere the surface's velocity",
+TEST_CASE("spikes in a still field stand where the field lays them out while the fluid slides under them, and off them the surface moves as the fluid",
           "[spikes][velocity]")
 {
     // The procedural spikes are laid out from the field every frame: a still field keeps them
