@@ -162,7 +162,7 @@ png/frame_%.png: shot/mesh_%.inc shot/magnets_%.inc shot/shot.pov shot/look.inc
 	    $(POVRAY) blur.ini -D Declare=FerroFrame=$(call frame_number,$*) +Osub/frame_$*_.png \
 	      $(if $(THREADS),+WT$(THREADS)) $(POVRAY_ARGS) && \
 	    $(POVRAY) average.ini -D Declare=FerroFrame=$(call frame_number,$*) +O../png/.frame_$*.tmp.png \
-	      $(if $(THREADS),+WT$(THREADS)); \
+	      $(if $(THREADS),+WT$(THREADS)) $(POVRAY_ARGS) +Q0 -A; \
 	  else \
 	    $(POVRAY) render.ini -D Declare=FerroFrame=$(call frame_number,$*) +O../png/.frame_$*.tmp.png \
 	      $(if $(THREADS),+WT$(THREADS)) $(POVRAY_ARGS); \

@@ -112,6 +112,13 @@ if [[ -x "$bin/ferro-spikes" ]] && grep -Eq '^[[:space:]]*\[\[[[:space:]]*magnet
   spikes=1
 fi
 
+# Every stage parses its own sections here, so that a bad key in any of them (or in a --set)
+# is bad input, exit 2 with the stage's line, before make runs: inside make it would be a
+# failed stage (exit 3).
+"$bin/ferro-sim" "$scene" --print-scene-inputs "${sets[@]}" > /dev/null
+"$bin/ferro-surface" --scene "$scene" --print-scene-inputs "${sets[@]}" > /dev/null
+if [[ $spikes == 1 ]]; then "$bin/ferro-spikes" --scene "$scene" --print-scene-inputs "${sets[@]}" > /dev/null; fi
+
 cat > "$out/Makefile.tmp" <<MAKEFILE
 # Written by scripts/shot.sh for this shot; targets and variables: $root/scripts/shot.mk
 SCENE := $scene

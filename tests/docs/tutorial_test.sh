@@ -54,7 +54,7 @@ for step in steps/*; do
         [[ -z "$cmd" || "$cmd" == \#* ]] && continue
         echo "tutorial: \$ $cmd"
         log="$scratch/$(basename "$step").log"
-        if ! bash -c "$cmd" > "$log" 2>&1; then
+        if ! bash -c "$cmd" < /dev/null > "$log" 2>&1; then
           tail -20 "$log" >&2
           fail "\`$cmd\` failed"
         fi
@@ -68,8 +68,9 @@ for f in 0010 0029 0030; do
   [[ -f "$png" ]] || fail "$png: missing"
   python3 "$src/tests/tools/pngcheck.py" varied "$png" || fail "$png is one flat colour"
 done
-# The final frame is final quality (the scene's 480 x 360), the preview ones 320 x 240.
+# The final frames are final quality (the scene's 480 x 360), the preview ones 320 x 240.
 python3 "$src/tests/tools/pngcheck.py" size out/my_dish/png/frame_0030.png 480 360 || fail "frame 30 is not 480 x 360"
+python3 "$src/tests/tools/pngcheck.py" size out/my_dish/png/frame_0010.png 320 240 || fail "frame 10 is not 320 x 240"
 [[ -s out/my_dish/preroll.ply ]] || fail "no pre-roll cache"
 grep -q "frame-job.sh" "$scratch/"*.log || fail "the Slurm dry run showed no frame array"
 echo "tutorial test: passed"

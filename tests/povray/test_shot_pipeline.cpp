@@ -239,6 +239,16 @@ TEST_CASE("shot.sh rejects bad arguments with one line and exit code 2 (a missin
     CHECK(res.output.find("ends at frame 3") != std::string::npos);
     res = run(shot + "'" + (dir / "tiny.toml").string() + "' '" + (dir / "out").string() + "' --frames 0:99999999999");
     CHECK(res.code == 2);
+    // A bad key of a later stage is bad input too, found before anything runs (inside make it
+    // would be a failed stage, exit 3): one line from the stage that reads it, naming the key.
+    for (const std::string set : {"surface.voxel_size=-1", "spikes.sharpness=9"}) {
+        res = run(shot + "'" + (dir / "tiny.toml").string() + "' '" + (dir / "out").string() + "' --set " + set);
+        INFO(set << ": " << res.output);
+        CHECK(res.code == 2);
+        CHECK(res.output.find(set.substr(0, set.find('='))) != std::string::npos);
+        CHECK(std::count(res.output.begin(), res.output.end(), '\n') == 1);
+        CHECK_FALSE(fs::exists(dir / "out" / "particles"));
+    }
 }
 
 TEST_CASE("shot.sh --preset passes the documented settings to the stages, and an unknown preset is exit 2", "[pov][pipeline]")
