@@ -16,6 +16,7 @@
 #include <algorithm>
 #include <cmath>
 #include <map>
+#include <optional>
 #include <random>
 #include <sstream>
 
@@ -61,6 +62,19 @@ SpikeScene scene(const std::string& text, std::vector<std::string> overrides = {
 {
     overrides.insert(overrides.begin(), "spikes.alpha=100");
     return parseSpikeScene(SceneDocument::parse(text, "test.toml", overrides));
+}
+
+// ferro-spikes on a flat pool of radius R at time t [s] (the mesh's `time` comment), the pool
+// moving at `velocity` [m/s] when one is given (the surface's vertex velocities), through the
+// files as the stage reads them.
+SpikeResult poolFrame(const SpikeScene& sc, const ferro::test::TempDir& dir, double R, double t,
+                      const std::optional<Vec3>& velocity = std::nullopt)
+{
+    TriangleMesh pool = makeFlatPool(R, kDepth, 20);
+    if (velocity) pool.velocities.assign(pool.vertices.size(), *velocity);
+    setComment(pool, "time", std::to_string(t));
+    writeMesh(dir.file("pool.ply"), pool);
+    return spikeFrame(sc, dir.file("pool.ply"), "", dir.file("spiky.ply"));
 }
 
 SpikeInput frameInput(const SpikeScene& sc, const TriangleMesh& mesh, double time = 0.0)
@@ -416,13 +430,7 @@ TEST_CASE("spikes grow over spikes.growth_time after the field jumps on, and equ
     const SpikeScene lagged = scene(text), instant = scene(text, {"spikes.growth_time=0"});
     REQUIRE(lagged.params.growthTime == 0.2);
     ferro::test::TempDir dir("growth");
-    auto frame = [&](const SpikeScene& sc, double t) {
-        TriangleMesh pool = makeFlatPool(R, kDepth, 20);
-        setComment(pool, "time", std::to_string(t));
-        const std::string in = dir.file("pool.ply"), out = dir.file("spiky.ply");
-        writeMesh(in, pool);
-        return spikeFrame(sc, in, "", out);
-    };
+    auto frame = [&](const SpikeScene& sc, double t) { return poolFrame(sc, dir, R, t); };
     const SpikeResult full = frame(instant, 1.5);
     REQUIRE(full.maxHeight > 0);
     // One frame (1/30 s) after the jump the instant pattern is at full height; the lagged one
@@ -456,11 +464,7 @@ TEST_CASE("the spikes' own velocity is the rate of their displacement: a field r
     const SpikeScene sc = scene(text);
     ferro::test::TempDir dir("spike-velocity");
     const double t = 1.5, H = 18000, dHdt = 4000;
-    TriangleMesh pool = makeFlatPool(R, kDepth, 20);
-    pool.velocities.assign(pool.vertices.size(), Vec3::Zero());   // the surface at rest
-    setComment(pool, "time", std::to_string(t));
-    writeMesh(dir.file("pool.ply"), pool);
-    const SpikeResult res = spikeFrame(sc, dir.file("pool.ply"), "", dir.file("spiky.ply"));
+    const SpikeResult res = poolFrame(sc, dir, R, t, Vec3::Zero());   // the surface at rest
     REQUIRE(res.maxHeight > 1e-3);
     REQUIRE(res.mesh.velocities.size() == res.mesh.vertices.size());
     double worst = 0, fastest = 0;
@@ -486,12 +490,8 @@ TEST_CASE("spikes in a still field stand where the field lays them out while the
     const double R = 0.03;
     const SpikeScene sc = scene(sceneText(R, uniformField(15000)));
     ferro::test::TempDir dir("spike-still");
-    TriangleMesh pool = makeFlatPool(R, kDepth, 20);
     const Vec3 drift(0.01f, -0.002f, 0.0f);   // the fluid's surface sliding sideways [m/s]
-    pool.velocities.assign(pool.vertices.size(), drift);
-    setComment(pool, "time", "1.0");
-    writeMesh(dir.file("pool.ply"), pool);
-    const SpikeResult res = spikeFrame(sc, dir.file("pool.ply"), "", dir.file("spiky.ply"));
+    const SpikeResult res = poolFrame(sc, dir, R, 1.0, drift);
     REQUIRE(res.maxHeight > 1e-3);
     REQUIRE(res.mesh.velocities.size() == res.mesh.vertices.size());
     size_t flat = 0, apexes = 0;
