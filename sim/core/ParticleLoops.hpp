@@ -20,6 +20,14 @@ void forEachParticle(size_t n, F&& f) {
     });
 }
 
+/// Calls f(begin, end) on blocks of [0, n) in parallel: for loops that hand a whole block to
+/// one function (the pressure sweeps, sim/sph/sweeps).
+template <class F>
+void forEachParticleBlock(size_t n, F&& f) {
+    tbb::parallel_for(tbb::blocked_range<size_t>(0, n, 256),
+                      [&](const tbb::blocked_range<size_t>& r) { f(r.begin(), r.end()); });
+}
+
 /// Sum of f(i) over [0, n) whose result does not depend on the thread count or
 /// scheduling: fixed blocks, each summed in order, blocks combined in order.
 template <class F>

@@ -68,6 +68,7 @@ private:
 
     FluidSimulation& sim_;
     std::vector<Real> alpha_, kappa_, kappaV_, source_, residual_;
+    std::vector<Real> change_;  // the density change of a field, per particle (FluidSimulation::divergence)
     std::vector<Real> cgResidual_, cgPreconditioned_, cgDirection_, cgProduct_; // conjugateGradient's vectors
     std::vector<uint8_t> cgInSet_;  // conjugateGradient: 1 where a particle may carry pressure (the set S)
 };
@@ -113,17 +114,22 @@ int DfsphSolver::relaxedJacobi(std::vector<Real>& kappa, const std::vector<Real>
     const std::vector<Vec3>& a = sim_.accelerations();
     std::vector<Real>& residual = residual_;
     residual.resize(n);
+    change_.resize(n);
     int it = 0;
     double err = 0;
     for (; it < maxIterations; ++it) {
         sim_.pressureAccelerations(kappa);
-        forEachParticle(n, [&](size_t i) {
-            const Real Ap = hp * sim_.divergence(i, a);
-            const Real r = source[i] - Ap;
-            kappa[i] = std::max(kappa[i] - Real(0.5) * r * alpha_[i] * invHp, Real(0));
-            // Sparse particles (near the free surface) do not count toward divergence error.
-            const bool counts = densitySolve || neighborCount(i) >= kDenseNeighborhood;
-            residual[i] = counts ? std::max(-r, Real(0)) : 0;
+        forEachParticleBlock(n, [&](size_t begin, size_t end) {
+            // The density change the pressure causes, a block at a time (one sweep call).
+            sim_.divergence(a, begin, end, change_.data());
+            for (size_t i = begin; i < end; ++i) {
+                const Real Ap = hp * change_[i];
+                const Real r = source[i] - Ap;
+                kappa[i] = std::max(kappa[i] - Real(0.5) * r * alpha_[i] * invHp, Real(0));
+                // Sparse particles (near the free surface) do not count toward divergence error.
+                const bool counts = densitySolve || neighborCount(i) >= kDenseNeighborhood;
+                residual[i] = counts ? std::max(-r, Real(0)) : 0;
+            }
         });
         err = deterministicSum(n, [&](size_t i) { return double(residual[i]); }) / double(std::max<size_t>(n, 1));
         if (it + 1 >= minIterations && err <= eta) {
@@ -201,8 +207,9 @@ int DfsphSolver::conjugateGradient(std::vector<Real>& kappa, const std::vector<R
         // The residual costs a sweep like an iteration's, and is counted as one.
         ++it;
         sim_.pressureAccelerations(kappa);
+        sim_.divergence(a, change_);
         forEachParticle(n, [&](size_t i) {
-            R[i] = -source[i] / hp + sim_.divergence(i, a);
+            R[i] = -source[i] / hp + change_[i];
             Z[i] = inS[i] ? alpha_[i] * R[i] : 0;
             P[i] = Z[i];
         });
@@ -214,7 +221,8 @@ int DfsphSolver::conjugateGradient(std::vector<Real>& kappa, const std::vector<R
         const int roundEnd = round == 0 ? std::max(1, maxIterations / 4) : maxIterations;
         while (it < roundEnd && err > eta && rz > 0) {
             sim_.pressureAccelerations(P);
-            forEachParticle(n, [&](size_t i) { Q[i] = -sim_.divergence(i, a); });
+            sim_.divergence(a, Q);
+            forEachParticle(n, [&](size_t i) { Q[i] = -Q[i]; });
             const double pq = dotOnS(P, Q);
             if (!(pq > 0)) break;
             const Real step = Real(rz / pq);
@@ -241,8 +249,9 @@ void DfsphSolver::solveDivergence(double dt) {
     const std::vector<Vec3>& a = sim_.accelerations();
     if (kappaV_.size() != n) kappaV_.assign(n, Real(0));
     source_.resize(n);
+    sim_.divergence(v, change_);
     forEachParticle(n, [&](size_t i) {
-        Real div = sim_.divergence(i, v);
+        Real div = change_[i];
         // Only compression is corrected, and not at the sparse free surface.
         if (neighborCount(i) < kDenseNeighborhood || div < 0) div = 0;
         source_[i] = -div;
@@ -269,6 +278,7 @@ void DfsphSolver::solveDensity(double dt) {
     const std::vector<Vec3>& a = sim_.accelerations();
     kappa_.resize(n);
     source_.resize(n);
+    sim_.divergence(v, change_);
     forEachParticle(n, [&](size_t i) {
         // Predicted density and the unclamped source 1 - rho* / rho0. With kappa >= 0 the
         // Jacobi sweep then solves the complementarity problem (no pressure where the fluid
@@ -281,7 +291,7 @@ void DfsphSolver::solveDensity(double dt) {
         // force (the Kelvin force of a magnet below the dish, 20-30 g) the pressurized
         // particles sat 30 % below rest density and that work pumped the fluid at 30-40 mm/s
         // for good (issue 13). Expansion still gets no pressure.
-        const Real predicted = rho[i] / rho0 + Real(dt) * sim_.divergence(i, v);
+        const Real predicted = rho[i] / rho0 + Real(dt) * change_[i];
         source_[i] = 1 - predicted;
         // Warm start from 0.8 of the previous step's pressure where the step compresses
         // (SPlisHSPlasH: 0.5): the solve, stopped at its tolerance, must end below the right

@@ -17,10 +17,6 @@
 #include <cmath>
 #include <sstream>
 
-#if defined(__SSE2__)
-#include <emmintrin.h>
-#endif
-
 namespace ferro {
 
 void FluidSimulation::updateMagnetics(bool forceSolve) {
@@ -96,41 +92,47 @@ void FluidSimulation::computeAccelerations(const Real* pOverRho2) {
     if (magnetics_) magnetics_->addKelvinAcceleration(a_);
 }
 
+PressureSweepInput FluidSimulation::sweepInput() const {
+    static_assert(sizeof(Vec3) == 3 * sizeof(float) && sizeof(Real) == sizeof(float),
+                  "the pressure sweeps read Vec3 arrays as three floats a particle");
+    PressureSweepInput in;
+    in.px = px_.data();
+    in.py = py_.data();
+    in.pz = pz_.data();
+    in.offset = fluidNbr_.offset.data();
+    in.count = fluidNbr_.count.data();
+    in.index = fluidNbr_.index.data();
+    in.gradFactor = fluidNbr_.gradFactor.data();
+    in.wallOffset = boundaryNbr_.offset.data();
+    in.wallCount = boundaryNbr_.count.data();
+    in.wallIndex = boundaryNbr_.index.data();
+    in.wallGradFactor = boundaryNbr_.gradFactor.data();
+    in.wallX = reinterpret_cast<const float*>(bx_.data());
+    in.wallVolume = bVolume_.data();
+    in.volume = Real(volume_);
+    in.wallMirror = kWallMirror;
+    return in;
+}
+
 void FluidSimulation::pressureAccelerations(const std::vector<Real>& kappa) {
     // a_i = -sum_j V (kappa_i + kappa_j) grad W_ij - sum_b V_b kWallMirror kappa_i grad W_ib, where
     // kappa = p / rho^2 in units normalized by rho0 (Bender & Koschier 2017).
-    const Real V = Real(volume_);
-    forEachParticle(x_.size(), [&](size_t i) {
-        const Real ki = kappa[i];
-        const Vec3 xi = x_[i];
-        Vec3 acc = Vec3::Zero();
-        uint32_t k = fluidNbr_.begin(i);
-        const uint32_t end = fluidNbr_.end(i);
-#if defined(__SSE2__)
-        const __m128 ki4 = _mm_set1_ps(ki), V4 = _mm_set1_ps(V);
-        __m128 ax = _mm_setzero_ps(), ay = _mm_setzero_ps(), az = _mm_setzero_ps();
-        for (; k + 4 <= end; k += 4) {
-            const uint32_t* c = fluidNbr_.index.data() + k;
-            const Offsets4 d(xi, px_.data(), py_.data(), pz_.data(), c);
-            const __m128 s = _mm_mul_ps(_mm_mul_ps(V4, _mm_add_ps(ki4, gather4(kappa.data(), c))),
-                                        _mm_loadu_ps(fluidNbr_.gradFactor.data() + k));
-            ax = _mm_add_ps(ax, _mm_mul_ps(s, d.dx));
-            ay = _mm_add_ps(ay, _mm_mul_ps(s, d.dy));
-            az = _mm_add_ps(az, _mm_mul_ps(s, d.dz));
-        }
-        acc = -Vec3(horizontalSum(ax), horizontalSum(ay), horizontalSum(az));
-#endif
-        for (; k < end; ++k) {
-            const uint32_t j = fluidNbr_.index[k];
-            acc -= (V * (ki + kappa[j]) * fluidNbr_.gradFactor[k]) * (xi - x_[j]);
-        }
-        if (ki != 0)
-            for (uint32_t k = boundaryNbr_.begin(i); k < boundaryNbr_.end(i); ++k) {
-                const uint32_t b = boundaryNbr_.index[k];
-                acc -= (kWallMirror * bVolume_[b] * ki * boundaryNbr_.gradFactor[k]) * (xi - bx_[b]);
-            }
-        a_[i] = acc;
-    });
+    const PressureSweepInput in = sweepInput();
+    const PressureSweeps& sweeps = pressureSweeps();
+    float* a = reinterpret_cast<float*>(a_.data());
+    forEachParticleBlock(x_.size(), [&](size_t begin, size_t end) { sweeps.accelerations(in, kappa.data(), a, begin, end); });
+}
+
+void FluidSimulation::divergence(const std::vector<Vec3>& u, size_t begin, size_t end, Real* out) const {
+    pressureSweeps().divergence(sweepInput(), reinterpret_cast<const float*>(u.data()), out, begin, end);
+}
+
+void FluidSimulation::divergence(const std::vector<Vec3>& u, std::vector<Real>& out) const {
+    out.resize(x_.size());
+    const PressureSweepInput in = sweepInput();
+    const PressureSweeps& sweeps = pressureSweeps();
+    const float* uf = reinterpret_cast<const float*>(u.data());
+    forEachParticleBlock(x_.size(), [&](size_t begin, size_t end) { sweeps.divergence(in, uf, out.data(), begin, end); });
 }
 
 } // namespace ferro

@@ -19,6 +19,7 @@
 #include "sim/spatial/NeighborSearch.hpp"
 #include "sim/sph/PressureSolver.hpp"
 #include "sim/sph/SanityGuard.hpp"
+#include "sim/sph/sweeps/PressureSweeps.hpp"
 #include "sim/scene/SimParams.hpp"
 
 #include <algorithm>
@@ -171,10 +172,16 @@ public:
     /// accelerations() = the pressure accelerations of kappa = p / (rho^2) normalized by
     /// rho0 (Bender & Koschier 2017), walls included; needs stored gradients.
     void pressureAccelerations(const std::vector<Real>& kappa);
-    /// sum_j V (u_i - u_j) . grad W_ij + sum_b V_b u_i . grad W_ib: D(rho/rho0)/Dt [1/s]
-    /// for u = velocities, the density change pressure accelerations cause for u = a.
-    /// Needs stored gradients.
-    Real divergence(size_t i, const std::vector<Vec3>& u) const;
+    /// out[i] = sum_j V (u_i - u_j) . grad W_ij + sum_b V_b u_i . grad W_ib for i in [begin,
+    /// end): D(rho/rho0)/Dt [1/s] for u = velocities, the density change pressure
+    /// accelerations cause for u = a. Needs stored gradients. The sweep of
+    /// sim/sph/sweeps/PressureSweeps.hpp, for one block of particles.
+    void divergence(const std::vector<Vec3>& u, size_t begin, size_t end, Real* out) const;
+    /// The same for every particle, out resized to the particle count.
+    void divergence(const std::vector<Vec3>& u, std::vector<Real>& out) const;
+    /// The arrays the pressure sweeps read (sim/sph/sweeps): positions, the stored pair
+    /// lists and the walls, valid until the next step.
+    PressureSweepInput sweepInput() const;
     /// With implicit viscosity, solves (I + dt L) v_new = v for the current velocities
     /// (Weiler 2018; sim/sph/ImplicitViscosity.hpp) and records the iterations in the
     /// stats; does nothing when viscosity is explicit (the force sweep has added it).
@@ -274,37 +281,5 @@ private:
     std::vector<Real> bpx_, bpy_, bpz_;
     SortedGrid bGrid_;
 };
-
-// Inline: the DFSPH solver calls it per particle in every Jacobi sweep, from its own file.
-inline Real FluidSimulation::divergence(size_t i, const std::vector<Vec3>& u) const {
-    // sum_j V (u_i - u_j) . grad W_ij + sum_b V_b u_i . grad W_ib (walls are at rest).
-    const Vec3 ui = u[i], xi = x_[i];
-    Real sum = 0;
-    uint32_t k = fluidNbr_.begin(i);
-    const uint32_t end = fluidNbr_.end(i);
-#if defined(__SSE2__)
-    const __m128 uix = _mm_set1_ps(ui.x()), uiy = _mm_set1_ps(ui.y()), uiz = _mm_set1_ps(ui.z());
-    __m128 sum4 = _mm_setzero_ps();
-    for (; k + 4 <= end; k += 4) {
-        const uint32_t* c = fluidNbr_.index.data() + k;
-        const Offsets4 d(xi, px_.data(), py_.data(), pz_.data(), c);
-        const __m128 dot = _mm_add_ps(_mm_add_ps(_mm_mul_ps(_mm_sub_ps(uix, gather4(u.data(), c, 0)), d.dx),
-                                                 _mm_mul_ps(_mm_sub_ps(uiy, gather4(u.data(), c, 1)), d.dy)),
-                                      _mm_mul_ps(_mm_sub_ps(uiz, gather4(u.data(), c, 2)), d.dz));
-        sum4 = _mm_add_ps(sum4, _mm_mul_ps(_mm_loadu_ps(fluidNbr_.gradFactor.data() + k), dot));
-    }
-    sum = horizontalSum(sum4);
-#endif
-    for (; k < end; ++k) {
-        const uint32_t j = fluidNbr_.index[k];
-        sum += fluidNbr_.gradFactor[k] * (ui - u[j]).dot(xi - x_[j]);
-    }
-    sum *= Real(volume_);
-    for (uint32_t k = boundaryNbr_.begin(i); k < boundaryNbr_.end(i); ++k) {
-        const uint32_t b = boundaryNbr_.index[k];
-        sum += bVolume_[b] * boundaryNbr_.gradFactor[k] * ui.dot(xi - bx_[b]);
-    }
-    return sum;
-}
 
 } // namespace ferro

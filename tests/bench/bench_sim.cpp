@@ -111,7 +111,10 @@ SweepCost timePressureSweep(FluidSimulation& sim) {
     for (int r = 0; r < 10; ++r) {
         const auto t0 = std::chrono::steady_clock::now();
         sim.pressureAccelerations(kappa);
-        forEachParticle(n, [&](size_t i) { out[i] = kappa[i] - Real(0.5) * sim.divergence(i, a); });
+        forEachParticleBlock(n, [&](size_t begin, size_t end) {
+            sim.divergence(a, begin, end, out.data());
+            for (size_t i = begin; i < end; ++i) out[i] = kappa[i] - Real(0.5) * out[i];
+        });
         cost.seconds = std::min(cost.seconds, std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count());
     }
     // Streamed: per pair (fluid and wall) its index and gradient factor in both passes; per
@@ -170,8 +173,8 @@ int main(int argc, char** argv) {
         return 2;
     }
     tbb::global_control limit(tbb::global_control::max_allowed_parallelism, size_t(threads));
-    std::printf("bench-sim: %d-particle dam break, %d threads, %.3f simulated s after %g s warm-up\n",
-                40960 * widen * widen, threads, seconds, warmup);
+    std::printf("bench-sim: %d-particle dam break, %d threads, %.3f simulated s after %g s warm-up, pressure sweeps %s\n",
+                40960 * widen * widen, threads, seconds, warmup, pressureSweeps().instructionSet);
     std::printf("reproduce: build/bin/bench-sim --threads %d --seconds %g --warmup %g --solver %s --tension %s --sample %g "
                 "--pressure-iteration %s --density-error %g --widen %d\n",
                 threads, seconds, warmup, solver.c_str(), tension.c_str(), sample, iteration.c_str(), densityError, widen);

@@ -1,0 +1,61 @@
+#pragma once
+// The two sweeps every pressure iteration runs (DFSPH's Jacobi and CG sweeps): the pressure
+// accelerations of a pressure field, and the density change of a velocity or acceleration
+// field. They are most of a DFSPH step's time (bench-sim's cost line: sweep_ms), so they are
+// compiled twice, for the baseline x86-64 (SSE2) and for x86-64-v3 (AVX2, FMA), and the
+// processor picks one at run time (pressureSweeps()). A generic build then runs them as fast
+// as a -march=native one (bench-sim's 40,960-particle dam break: 0.89x the DFSPH step).
+//
+// Contract: plain arrays only, so that the x86-64-v3 copy shares no inline code with the rest
+// of the program (an inline function compiled for AVX2 in one file could otherwise be the
+// copy the linker keeps for every file). Results are deterministic for a given processor;
+// the two copies differ in the last bits (fused multiply-adds), not more (tested:
+// tests/sim/sph/test_PressureSweeps.cpp).
+#include <cstddef>
+#include <cstdint>
+
+namespace ferro {
+
+/// The particles' positions and neighbour lists as the sweeps read them (sorted order).
+/// Vectors are three floats a particle (Vec3's layout).
+struct PressureSweepInput {
+    const float* px = nullptr;  ///< fluid positions, split into x, y, z [m]
+    const float* py = nullptr;
+    const float* pz = nullptr;
+    const uint32_t* offset = nullptr;      ///< fluid pairs: first slot of particle i
+    const uint32_t* count = nullptr;       ///< fluid pairs: neighbours of particle i
+    const uint32_t* index = nullptr;       ///< fluid pairs: the neighbour j
+    const float* gradFactor = nullptr;     ///< s_ij: grad W_ij = s_ij (x_i - x_j)
+    const uint32_t* wallOffset = nullptr;  ///< wall pairs, likewise
+    const uint32_t* wallCount = nullptr;
+    const uint32_t* wallIndex = nullptr;
+    const float* wallGradFactor = nullptr;
+    const float* wallX = nullptr;          ///< wall particle positions, three floats each [m]
+    const float* wallVolume = nullptr;     ///< Akinci volumes V_b [m^3]
+    float volume = 0;                      ///< fluid particle volume V [m^3]
+    float wallMirror = 1;                  ///< a wall pushes with kWallMirror kappa_i
+};
+
+/// a_i = -sum_j V (kappa_i + kappa_j) grad W_ij - sum_b V_b mirror kappa_i grad W_ib for i in
+/// [begin, end), written to a[3 i .. 3 i + 2] (Bender & Koschier 2017, kappa = p / rho^2 over rho0).
+using PressureAccelerationSweep = void (*)(const PressureSweepInput&, const float* kappa, float* a, size_t begin,
+                                          size_t end);
+/// out[i] = sum_j V (u_i - u_j) . grad W_ij + sum_b V_b u_i . grad W_ib for i in [begin, end):
+/// D(rho / rho0)/Dt [1/s] for u = velocities (walls at rest).
+using DivergenceSweep = void (*)(const PressureSweepInput&, const float* u, float* out, size_t begin, size_t end);
+
+struct PressureSweeps {
+    PressureAccelerationSweep accelerations;
+    DivergenceSweep divergence;
+    const char* instructionSet;  ///< "x86-64-v3" or "baseline"
+};
+
+/// The copy for this processor, chosen once: x86-64-v3 where the processor has AVX2 and FMA,
+/// unless the environment sets FERRO_SWEEPS=baseline (for comparisons).
+const PressureSweeps& pressureSweeps();
+/// Each copy compiled into this build (the baseline always; x86-64-v3 on x86-64 where the
+/// processor can run it), for tests that hold them to each other.
+const PressureSweeps& baselinePressureSweeps();
+const PressureSweeps* x86v3PressureSweeps();
+
+} // namespace ferro
