@@ -76,7 +76,7 @@ bin="${FERRO_BIN:-$root/build/bin}"
 # SPlisHSPlasH's own build is (-march=native): the report says which comparison it is.
 ferro_native=0
 grep -qs '^FERRO_NATIVE:BOOL=ON' "$bin/../CMakeCache.txt" && ferro_native=1
-[[ -x "$bin/bench-sim" ]] || die 4 "$bin/bench-sim: not built (cmake --build build --target bench-sim)"
+[[ -x "$bin/bench-sim" ]] || die 4 "$bin/bench-sim: not built (scripts/build.sh --with-benchmarks)"
 seconds="${PEER_SECONDS:-$([[ "${BENCH_QUICK:-0}" == 1 ]] && echo 0.02 || echo 0.05)}"
 # The WCSPH pair is shorter: SPlisHSPlasH's WCSPH steps cost ~5x Ferro's here (its
 # neighbour search every step), and WCSPH takes ~15x as many steps as DFSPH. Over its first

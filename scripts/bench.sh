@@ -48,8 +48,8 @@ mkdir -p "$out/cache" || die 4 "$out: cannot create the output directory"
 out="$(cd "$out" && pwd)"
 
 if [[ $build == 1 ]]; then
-  echo "bench.sh: building (scripts/build.sh)" >&2
-  "$root/scripts/build.sh" > "$out/cache/build.log" 2>&1 || { tail -n 20 "$out/cache/build.log" >&2; die 3 "the build failed"; }
+  echo "bench.sh: building (scripts/build.sh --with-benchmarks)" >&2
+  "$root/scripts/build.sh" --with-benchmarks > "$out/cache/build.log" 2>&1 || { tail -n 20 "$out/cache/build.log" >&2; die 3 "the build failed"; }
 fi
 
 start=$SECONDS failed=()

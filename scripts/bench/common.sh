@@ -27,7 +27,7 @@ bench_init() {
 # bench_need EXE...: every executable must be in $bin (exit 4 naming the first missing one).
 bench_need() {
   local e
-  for e in "$@"; do [[ -x "$bin/$e" ]] || bench_die 4 "$bin/$e is missing (run scripts/build.sh)"; done
+  for e in "$@"; do [[ -x "$bin/$e" ]] || bench_die 4 "$bin/$e is missing (run scripts/build.sh --with-benchmarks)"; done
 }
 
 # bench_time VAR CMD...: runs CMD (stdout and stderr to $work/last.log) and stores its CPU
