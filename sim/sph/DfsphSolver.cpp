@@ -111,7 +111,6 @@ int DfsphSolver::relaxedJacobi(std::vector<Real>& kappa, const std::vector<Real>
     // pressure accelerations cause. Stops when the mean residual is below eta.
     const size_t n = sim_.size();
     const Real hp = Real(hPow), invHp = Real(1 / hPow);
-    const std::vector<Vec3>& a = sim_.accelerations();
     std::vector<Real>& residual = residual_;
     residual.resize(n);
     change_.resize(n);
@@ -121,7 +120,7 @@ int DfsphSolver::relaxedJacobi(std::vector<Real>& kappa, const std::vector<Real>
         sim_.pressureAccelerations(kappa);
         forEachParticleBlock(n, [&](size_t begin, size_t end) {
             // The density change the pressure causes, a block at a time (one sweep call).
-            sim_.divergence(a, begin, end, change_.data());
+            sim_.pressureDivergence(begin, end, change_.data());
             for (size_t i = begin; i < end; ++i) {
                 const Real Ap = hp * change_[i];
                 const Real r = source[i] - Ap;
@@ -168,7 +167,6 @@ int DfsphSolver::conjugateGradient(std::vector<Real>& kappa, const std::vector<R
     // (deterministicSum): resumed runs stay exact.
     const size_t n = sim_.size();
     const Real hp = Real(hPow);
-    const std::vector<Vec3>& a = sim_.accelerations();
     std::vector<Real>& R = cgResidual_;        // b - M kappa, every particle
     std::vector<Real>& Z = cgPreconditioned_;  // alpha R on S
     std::vector<Real>& P = cgDirection_;
@@ -207,7 +205,7 @@ int DfsphSolver::conjugateGradient(std::vector<Real>& kappa, const std::vector<R
         // The residual costs a sweep like an iteration's, and is counted as one.
         ++it;
         sim_.pressureAccelerations(kappa);
-        sim_.divergence(a, change_);
+        sim_.pressureDivergence(change_);
         forEachParticle(n, [&](size_t i) {
             R[i] = -source[i] / hp + change_[i];
             Z[i] = inS[i] ? alpha_[i] * R[i] : 0;
@@ -221,7 +219,7 @@ int DfsphSolver::conjugateGradient(std::vector<Real>& kappa, const std::vector<R
         const int roundEnd = round == 0 ? std::max(1, maxIterations / 4) : maxIterations;
         while (it < roundEnd && err > eta && rz > 0) {
             sim_.pressureAccelerations(P);
-            sim_.divergence(a, Q);
+            sim_.pressureDivergence(Q);
             forEachParticle(n, [&](size_t i) { Q[i] = -Q[i]; });
             const double pq = dotOnS(P, Q);
             if (!(pq > 0)) break;

@@ -63,6 +63,8 @@ void FluidSimulation::searchCandidates() {
     if (magnetics_) magnetics_->permute(order_);
     grid_.index(x_, grid_.geometry());
     splitCoordinates(x_, px_, py_, pz_);
+    p4_.resize(n);
+    forEachParticle(n, [&](size_t i) { setPadded(i); });
     xSearch_ = x_;
     searchStep_ = steps_;
     ++stats_.searches;

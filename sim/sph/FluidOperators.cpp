@@ -96,9 +96,7 @@ PressureSweepInput FluidSimulation::sweepInput() const {
     static_assert(sizeof(Vec3) == 3 * sizeof(float) && sizeof(Real) == sizeof(float),
                   "the pressure sweeps read Vec3 arrays as three floats a particle");
     PressureSweepInput in;
-    in.px = px_.data();
-    in.py = py_.data();
-    in.pz = pz_.data();
+    in.p4 = reinterpret_cast<const float*>(p4_.data());
     in.offset = fluidNbr_.offset.data();
     in.count = fluidNbr_.count.data();
     in.index = fluidNbr_.index.data();
@@ -120,11 +118,25 @@ void FluidSimulation::pressureAccelerations(const std::vector<Real>& kappa) {
     const PressureSweepInput in = sweepInput();
     const PressureSweeps& sweeps = pressureSweeps();
     float* a = reinterpret_cast<float*>(a_.data());
-    forEachParticleBlock(x_.size(), [&](size_t begin, size_t end) { sweeps.accelerations(in, kappa.data(), a, begin, end); });
+    a4_.resize(x_.size());
+    float* a4 = reinterpret_cast<float*>(a4_.data());
+    forEachParticleBlock(x_.size(), [&](size_t begin, size_t end) { sweeps.accelerations(in, kappa.data(), a, a4, begin, end); });
 }
 
 void FluidSimulation::divergence(const std::vector<Vec3>& u, size_t begin, size_t end, Real* out) const {
-    pressureSweeps().divergence(sweepInput(), reinterpret_cast<const float*>(u.data()), out, begin, end);
+    pressureSweeps().divergence(sweepInput(), reinterpret_cast<const float*>(u.data()), 3, out, begin, end);
+}
+
+void FluidSimulation::pressureDivergence(size_t begin, size_t end, Real* out) const {
+    pressureSweeps().divergence(sweepInput(), reinterpret_cast<const float*>(a4_.data()), 4, out, begin, end);
+}
+
+void FluidSimulation::pressureDivergence(std::vector<Real>& out) const {
+    out.resize(x_.size());
+    const PressureSweepInput in = sweepInput();
+    const PressureSweeps& sweeps = pressureSweeps();
+    const float* a4 = reinterpret_cast<const float*>(a4_.data());
+    forEachParticleBlock(x_.size(), [&](size_t begin, size_t end) { sweeps.divergence(in, a4, 4, out.data(), begin, end); });
 }
 
 void FluidSimulation::divergence(const std::vector<Vec3>& u, std::vector<Real>& out) const {
@@ -132,7 +144,7 @@ void FluidSimulation::divergence(const std::vector<Vec3>& u, std::vector<Real>& 
     const PressureSweepInput in = sweepInput();
     const PressureSweeps& sweeps = pressureSweeps();
     const float* uf = reinterpret_cast<const float*>(u.data());
-    forEachParticleBlock(x_.size(), [&](size_t begin, size_t end) { sweeps.divergence(in, uf, out.data(), begin, end); });
+    forEachParticleBlock(x_.size(), [&](size_t begin, size_t end) { sweeps.divergence(in, uf, 3, out.data(), begin, end); });
 }
 
 } // namespace ferro

@@ -303,6 +303,7 @@ void FluidSimulation::integratePositions(double dt) {
         px_[i] = x_[i].x();
         py_[i] = x_[i].y();
         pz_[i] = x_[i].z();
+        setPadded(i);
     });
     if (bad != size_t(-1)) {
         std::ostringstream msg;

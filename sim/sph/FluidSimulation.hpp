@@ -179,6 +179,10 @@ public:
     void divergence(const std::vector<Vec3>& u, size_t begin, size_t end, Real* out) const;
     /// The same for every particle, out resized to the particle count.
     void divergence(const std::vector<Vec3>& u, std::vector<Real>& out) const;
+    /// divergence() of the accelerations the last pressureAccelerations() computed, from
+    /// their padded copy (the pressure iterations' sweep: four aligned loads a pair).
+    void pressureDivergence(size_t begin, size_t end, Real* out) const;
+    void pressureDivergence(std::vector<Real>& out) const;
     /// The arrays the pressure sweeps read (sim/sph/sweeps): positions, the stored pair
     /// lists and the walls, valid until the next step.
     PressureSweepInput sweepInput() const;
@@ -271,6 +275,13 @@ private:
     bool storeGradients_ = true;              // keep grad W per pair (the solver asks for it)
     std::vector<Real> px_, py_, pz_;          // coordinates again, split (kept current) for the
                                               // search and the four-pair loops
+    struct alignas(16) Float4 {
+        float v[4];
+    };
+    std::vector<Float4> p4_;                  // positions again, padded (kept current), for
+                                              // the pressure sweeps (sim/sph/sweeps)
+    std::vector<Float4> a4_;                  // the last pressure accelerations, padded
+    void setPadded(size_t i) { p4_[i] = Float4{{x_[i].x(), x_[i].y(), x_[i].z(), 0.0f}}; }
     std::vector<uint32_t> scratch_, bScratch_; // fixed-capacity candidate lists of a search
     std::vector<uint32_t> order_;
     size_t capacity_ = 64, bCapacity_ = 32;

@@ -105,25 +105,24 @@ SweepCost timePressureSweep(FluidSimulation& sim) {
     const size_t n = sim.size();
     std::vector<Real> kappa(n), out(n);
     for (size_t i = 0; i < n; ++i) kappa[i] = Real(1e-3) * Real(i % 7);
-    const std::vector<Vec3>& a = sim.accelerations();
     SweepCost cost;
     cost.seconds = 1e30;
     for (int r = 0; r < 10; ++r) {
         const auto t0 = std::chrono::steady_clock::now();
         sim.pressureAccelerations(kappa);
         forEachParticleBlock(n, [&](size_t begin, size_t end) {
-            sim.divergence(a, begin, end, out.data());
+            sim.pressureDivergence(begin, end, out.data());
             for (size_t i = begin; i < end; ++i) out[i] = kappa[i] - Real(0.5) * out[i];
         });
         cost.seconds = std::min(cost.seconds, std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count());
     }
     // Streamed: per pair (fluid and wall) its index and gradient factor in both passes; per
     // particle the lists' offset and count (both passes), kappa (read twice), the
-    // accelerations (written, read) and the result (written). Gathers of neighbours'
+    // accelerations (written plain and padded, the padded read) and the result (written). Gathers of neighbours'
     // kappa and acceleration are taken to hit the cache (particles are sorted in space).
     const double pairs = double(sim.fluidNeighbors().index.size() + sim.boundaryNeighbors().index.size());
     cost.bytes = 2 * pairs * (sizeof(uint32_t) + sizeof(Real)) +
-                 double(n) * (2 * 2 * 2 * sizeof(uint32_t) + 2 * sizeof(Real) + 2 * sizeof(Vec3) + sizeof(Real));
+                 double(n) * (2 * 2 * 2 * sizeof(uint32_t) + 2 * sizeof(Real) + sizeof(Vec3) + 2 * 4 * sizeof(Real) + sizeof(Real));
     return cost;
 }
 

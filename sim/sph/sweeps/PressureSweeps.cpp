@@ -29,7 +29,12 @@ const PressureSweeps* x86v3PressureSweeps() {
 #if defined(FERRO_SWEEPS_X86V3)
     // table() is x86-64-v3 code itself: called only once the processor is known to run it.
     static const PressureSweeps* sweeps = []() -> const PressureSweeps* {
-        if (!(__builtin_cpu_supports("avx2") && __builtin_cpu_supports("fma"))) return nullptr;
+#if defined(__clang__)
+        const bool v3 = __builtin_cpu_supports("avx2") && __builtin_cpu_supports("fma") && __builtin_cpu_supports("bmi2");
+#else
+        const bool v3 = __builtin_cpu_supports("x86-64-v3");   // GCC 12: the whole level
+#endif
+        if (!v3) return nullptr;
         static const PressureSweeps table = sweeps_x86v3::table();
         return &table;
     }();

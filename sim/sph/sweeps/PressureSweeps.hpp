@@ -4,13 +4,14 @@
 // field. They are most of a DFSPH step's time (bench-sim's cost line: sweep_ms), so they are
 // compiled twice, for the baseline x86-64 (SSE2) and for x86-64-v3 (AVX2, FMA), and the
 // processor picks one at run time (pressureSweeps()). A generic build then runs them as fast
-// as a -march=native one (bench-sim's 40,960-particle dam break: 0.89x the DFSPH step).
+// as a -march=native one (bench-sim's 40,960-particle dam break: sweep 0.77x, DFSPH step 0.81x).
 //
 // Contract: plain arrays only, so that the x86-64-v3 copy shares no inline code with the rest
 // of the program (an inline function compiled for AVX2 in one file could otherwise be the
-// copy the linker keeps for every file). Results are deterministic for a given processor;
-// the two copies differ in the last bits (fused multiply-adds), not more (tested:
-// tests/sim/sph/test_PressureSweeps.cpp).
+// copy the linker keeps for every file). The two copies give the same bits (the x86-64-v3 one
+// is compiled with -ffp-contract=off: no fused multiply-adds), and the same bits as the
+// sweeps before they moved here: a frame does not depend on the processor that made it
+// (tested: tests/sim/sph/test_PressureSweeps.cpp).
 #include <cstddef>
 #include <cstdint>
 
@@ -19,9 +20,7 @@ namespace ferro {
 /// The particles' positions and neighbour lists as the sweeps read them (sorted order).
 /// Vectors are three floats a particle (Vec3's layout).
 struct PressureSweepInput {
-    const float* px = nullptr;  ///< fluid positions, split into x, y, z [m]
-    const float* py = nullptr;
-    const float* pz = nullptr;
+    const float* p4 = nullptr;  ///< fluid positions, four floats a particle (x, y, z, 0), 16-byte aligned [m]
     const uint32_t* offset = nullptr;      ///< fluid pairs: first slot of particle i
     const uint32_t* count = nullptr;       ///< fluid pairs: neighbours of particle i
     const uint32_t* index = nullptr;       ///< fluid pairs: the neighbour j
@@ -37,12 +36,15 @@ struct PressureSweepInput {
 };
 
 /// a_i = -sum_j V (kappa_i + kappa_j) grad W_ij - sum_b V_b mirror kappa_i grad W_ib for i in
-/// [begin, end), written to a[3 i .. 3 i + 2] (Bender & Koschier 2017, kappa = p / rho^2 over rho0).
-using PressureAccelerationSweep = void (*)(const PressureSweepInput&, const float* kappa, float* a, size_t begin,
-                                          size_t end);
+/// [begin, end), written to a[3 i .. 3 i + 2] and, unless a4 is null, to a4[4 i .. 4 i + 3]
+/// padded with 0 (Bender & Koschier 2017, kappa = p / rho^2 over rho0).
+using PressureAccelerationSweep = void (*)(const PressureSweepInput&, const float* kappa, float* a, float* a4,
+                                          size_t begin, size_t end);
 /// out[i] = sum_j V (u_i - u_j) . grad W_ij + sum_b V_b u_i . grad W_ib for i in [begin, end):
-/// D(rho / rho0)/Dt [1/s] for u = velocities (walls at rest).
-using DivergenceSweep = void (*)(const PressureSweepInput&, const float* u, float* out, size_t begin, size_t end);
+/// D(rho / rho0)/Dt [1/s] for u = velocities (walls at rest). u holds `stride` floats a
+/// particle: 3 (Vec3) or 4 (padded as a4 above, 16-byte aligned: the faster loads).
+using DivergenceSweep = void (*)(const PressureSweepInput&, const float* u, int stride, float* out, size_t begin,
+                                 size_t end);
 
 struct PressureSweeps {
     PressureAccelerationSweep accelerations;
@@ -50,7 +52,7 @@ struct PressureSweeps {
     const char* instructionSet;  ///< "x86-64-v3" or "baseline"
 };
 
-/// The copy for this processor, chosen once: x86-64-v3 where the processor has AVX2 and FMA,
+/// The copy for this processor, chosen once: x86-64-v3 where the processor has that level,
 /// unless the environment sets FERRO_SWEEPS=baseline (for comparisons).
 const PressureSweeps& pressureSweeps();
 /// Each copy compiled into this build (the baseline always; x86-64-v3 on x86-64 where the
