@@ -31,7 +31,8 @@
 # factor of its fluid model), so its fluid is the same lattice at 0.928 d (0.8 of Ferro's
 # volume, at rest density: see peer_scene) and has 1.25x Ferro's neighbours a particle;
 # it is compiled with -march=native (AVX2), Ferro for generic x86-64 unless FERRO_BIN is a
-# FERRO_NATIVE=ON build (peer.md says which); both in
+# FERRO_NATIVE=ON build (peer.md says which; a generic Ferro still runs its pressure sweeps'
+# x86-64-v3 copy where the processor has it: sim/sph/sweeps); both in
 # single precision; OpenMP against TBB.
 #
 # The density error each code reaches is measured one way for both: the mean compression
@@ -76,6 +77,9 @@ bin="${FERRO_BIN:-$root/build/bin}"
 # SPlisHSPlasH's own build is (-march=native): the report says which comparison it is.
 ferro_native=0
 grep -qs '^FERRO_NATIVE:BOOL=ON' "$bin/../CMakeCache.txt" && ferro_native=1
+# The pressure sweeps' copy bench-sim runs (its first line: "pressure sweeps NAME").
+ferro_sweeps="$("$bin/bench-sim" --seconds 0.0001 --warmup 0 --solver wcsph --tension off 2>/dev/null | sed -n 's/.*pressure sweeps \([^ ]*\)$/\1/p' | head -1)"
+ferro_sweeps="${ferro_sweeps:-the baseline}"
 [[ -x "$bin/bench-sim" ]] || die 4 "$bin/bench-sim: not built (scripts/build.sh --with-benchmarks)"
 seconds="${PEER_SECONDS:-$([[ "${BENCH_QUICK:-0}" == 1 ]] && echo 0.02 || echo 0.05)}"
 # The WCSPH pair is shorter: SPlisHSPlasH's WCSPH steps cost ~5x Ferro's here (its
@@ -346,7 +350,8 @@ col() { awk -F, -v row="$1" -v name="$2" 'NR == 1 { for (i = 1; i <= NF; ++i) c[
     echo "  FERRO_NATIVE=ON); its threads are OpenMP (passive waiting) against Ferro's TBB."
   else
     echo "  it is built with -march=native (AVX2 kernels), Ferro for generic"
-    echo "  x86-64 (SSE2); its threads are OpenMP (passive waiting) against Ferro's TBB, and OpenMP"
+    echo "  x86-64 (SSE2), its pressure sweeps picked at run time ($ferro_sweeps copy here, the same"
+    echo "  bits as the generic one); its threads are OpenMP (passive waiting) against Ferro's TBB, and OpenMP"
     echo "  suffers more on this oversubscribed machine."
   fi
 } > "$out/peer.md"
