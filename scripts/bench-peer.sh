@@ -77,10 +77,15 @@ bin="${FERRO_BIN:-$root/build/bin}"
 # SPlisHSPlasH's own build is (-march=native): the report says which comparison it is.
 ferro_native=0
 grep -qs '^FERRO_NATIVE:BOOL=ON' "$bin/../CMakeCache.txt" && ferro_native=1
-# The pressure sweeps' copy bench-sim runs (its first line: "pressure sweeps NAME").
-ferro_sweeps="$("$bin/bench-sim" --seconds 0.0001 --warmup 0 --solver wcsph --tension off 2>/dev/null | sed -n 's/.*pressure sweeps \([^ ]*\)$/\1/p' | head -1)"
-ferro_sweeps="${ferro_sweeps:-the baseline}"
+# bench-sim is not in the default build: with the default build/bin it is (re)built here, so
+# an old one cannot stand in for the code being measured.
+if [[ -z "${FERRO_BIN:-}" && -f "$root/build/CMakeCache.txt" ]]; then
+  cmake --build "$root/build" --target bench-sim > /dev/null 2>&1 || die 3 "building bench-sim failed (cmake --build build --target bench-sim)"
+fi
 [[ -x "$bin/bench-sim" ]] || die 4 "$bin/bench-sim: not built (scripts/build.sh --with-benchmarks)"
+# The pressure sweeps' copy bench-sim runs (its first line: "pressure sweeps NAME").
+ferro_sweeps="$("$bin/bench-sim" --seconds 0.0001 --warmup 0 --solver wcsph --tension off 2>/dev/null | sed -n 's/.*pressure sweeps \([^ ]*\)$/\1/p' | head -1 || true)"
+ferro_sweeps="${ferro_sweeps:-the baseline}"
 seconds="${PEER_SECONDS:-$([[ "${BENCH_QUICK:-0}" == 1 ]] && echo 0.02 || echo 0.05)}"
 # The WCSPH pair is shorter: SPlisHSPlasH's WCSPH steps cost ~5x Ferro's here (its
 # neighbour search every step), and WCSPH takes ~15x as many steps as DFSPH. Over its first

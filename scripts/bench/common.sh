@@ -25,9 +25,17 @@ bench_init() {
 }
 
 # bench_need EXE...: every executable must be in $bin (exit 4 naming the first missing one).
+# With the default build/bin, each is (re)built first: benchmarks are not in the default
+# build, so one left from an older build would otherwise measure old code.
 bench_need() {
   local e
-  for e in "$@"; do [[ -x "$bin/$e" ]] || bench_die 4 "$bin/$e is missing (run scripts/build.sh --with-benchmarks)"; done
+  for e in "$@"; do
+    if [[ -z "${FERRO_BIN:-}" && -f "$root/build/CMakeCache.txt" ]]; then
+      cmake --build "$root/build" --target "$e" > "$work/build-$e.log" 2>&1 ||
+        bench_die 3 "building $e failed: $(tail -n 1 "$work/build-$e.log")"
+    fi
+    [[ -x "$bin/$e" ]] || bench_die 4 "$bin/$e is missing (run scripts/build.sh --with-benchmarks)"
+  done
 }
 
 # bench_time VAR CMD...: runs CMD (stdout and stderr to $work/last.log) and stores its CPU

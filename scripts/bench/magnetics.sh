@@ -25,7 +25,8 @@ mkdir -p "$out/cache"
 out="$(cd "$out" && pwd)"
 cache="$out/cache"
 for exe in ferro-sim bench-heap-profile bench-magnetization; do
-    [[ -x "$bench_bin/$exe" ]] || { echo "magnetics.sh: error: $bench_bin/$exe is missing (run scripts/build.sh)" >&2; exit 4; }
+    sim_build_default "$exe" || { echo "magnetics.sh: error: building $exe failed" >&2; exit 3; }
+    [[ -x "$bench_bin/$exe" ]] || { echo "magnetics.sh: error: $bench_bin/$exe is missing (run scripts/build.sh --with-benchmarks)" >&2; exit 4; }
 done
 if [[ "${BENCH_QUICK:-0}" == 1 ]]; then
     settle=0.5 count=320 field_counts=(320 640)

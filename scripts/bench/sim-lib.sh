@@ -15,6 +15,13 @@ bench_bin="${FERRO_BIN:-$bench_root/build/bin}"
 bench_scene="$bench_root/scripts/bench/heap_pool.toml"
 bench_jobs="${BENCH_JOBS:-2}"
 
+# sim_build_default EXE: with the default build/bin (no FERRO_BIN), (re)builds EXE: the
+# benchmarks are not in the default build, and an old one would measure old code.
+sim_build_default() {
+    [[ -z "${FERRO_BIN:-}" && -f "$bench_root/build/CMakeCache.txt" ]] || return 0
+    cmake --build "$bench_root/build" --target "$1" > /dev/null 2>&1
+}
+
 # The hash of ferro-sim's sources (committed state plus uncommitted edits), or of the binary.
 sim_sources_hash() {
     if git -C "$bench_root" rev-parse --git-dir >/dev/null 2>&1; then

@@ -31,7 +31,8 @@ mkdir -p "$out/cache"
 out="$(cd "$out" && pwd)"
 cache="$out/cache"
 for exe in ferro-sim bench-heap-profile; do
-    [[ -x "$bench_bin/$exe" ]] || { echo "sim.sh: error: $bench_bin/$exe is missing (run scripts/build.sh)" >&2; exit 4; }
+    sim_build_default "$exe" || { echo "sim.sh: error: building $exe failed" >&2; exit 3; }
+    [[ -x "$bench_bin/$exe" ]] || { echo "sim.sh: error: $bench_bin/$exe is missing (run scripts/build.sh --with-benchmarks)" >&2; exit 4; }
 done
 
 if [[ "${BENCH_QUICK:-0}" == 1 ]]; then

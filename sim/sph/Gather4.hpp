@@ -1,6 +1,7 @@
 #pragma once
 // Four-lane (SSE2) gathers for the neighbour loops that take four pairs at a time: the
-// force sweep, the neighbour compaction and DFSPH's pressure sweeps. Lanes are filled
+// force sweep and the neighbour compaction (DFSPH's pressure sweeps have their own copy in
+// sim/sph/sweeps, which may share no inline code). Lanes are filled
 // from scalar loads (SSE2 has no gather instruction); the arithmetic after them is what
 // the four lanes buy.
 #include "sim/core/Types.hpp"

@@ -30,7 +30,8 @@ const PressureSweeps* x86v3PressureSweeps() {
     // table() is x86-64-v3 code itself: called only once the processor is known to run it.
     static const PressureSweeps* sweeps = []() -> const PressureSweeps* {
 #if defined(__clang__)
-        const bool v3 = __builtin_cpu_supports("avx2") && __builtin_cpu_supports("fma") && __builtin_cpu_supports("bmi2");
+        const bool v3 = __builtin_cpu_supports("avx") && __builtin_cpu_supports("avx2") && __builtin_cpu_supports("fma") &&
+                        __builtin_cpu_supports("bmi") && __builtin_cpu_supports("bmi2") && __builtin_cpu_supports("f16c");
 #else
         const bool v3 = __builtin_cpu_supports("x86-64-v3");   // GCC 12: the whole level
 #endif

@@ -4,7 +4,8 @@
 // field. They are most of a DFSPH step's time (bench-sim's cost line: sweep_ms), so they are
 // compiled twice, for the baseline x86-64 (SSE2) and for x86-64-v3 (AVX2, FMA), and the
 // processor picks one at run time (pressureSweeps()). A generic build then runs them as fast
-// as a -march=native one (bench-sim's 40,960-particle dam break: sweep 0.77x, DFSPH step 0.81x).
+// as a -march=native one did (bench-sim's 40,960-particle dam break: sweep 0.77x, DFSPH step
+// 0.81x of the generic build before; README.md).
 //
 // Contract: plain arrays only, so that the x86-64-v3 copy shares no inline code with the rest
 // of the program (an inline function compiled for AVX2 in one file could otherwise be the

@@ -832,7 +832,7 @@ TEST_CASE("a pool at fine spacing over a strong magnet comes to rest (DFSPH and 
 }
 
 // The same pool and law at four times the particles (10,240, spacing 1.6x finer): settled for
-// 2 s, then the Bernoulli law on the mean of 11 looks over 2.0-2.5 s, the surface half a
+// 1.5 s, then the Bernoulli law on the mean of 11 looks over 1.5-2.0 s, the surface half a
 // spacing out from the column tops (ringProfile). 
 static BernoulliCheck finePoolBernoulli(double chi0, const std::string& fit, double& rms) {
     FluidSimulation sim(loadExample("ferrohydrostatic_pool.toml",
