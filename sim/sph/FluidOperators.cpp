@@ -127,24 +127,18 @@ void FluidSimulation::divergence(const std::vector<Vec3>& u, size_t begin, size_
     pressureSweeps().divergence(sweepInput(), reinterpret_cast<const float*>(u.data()), 3, out, begin, end);
 }
 
+void FluidSimulation::divergence(const std::vector<Vec3>& u, std::vector<Real>& out) const {
+    out.resize(x_.size());
+    forEachParticleBlock(x_.size(), [&](size_t begin, size_t end) { divergence(u, begin, end, out.data()); });
+}
+
 void FluidSimulation::pressureDivergence(size_t begin, size_t end, Real* out) const {
     pressureSweeps().divergence(sweepInput(), reinterpret_cast<const float*>(a4_.data()), 4, out, begin, end);
 }
 
 void FluidSimulation::pressureDivergence(std::vector<Real>& out) const {
     out.resize(x_.size());
-    const PressureSweepInput in = sweepInput();
-    const PressureSweeps& sweeps = pressureSweeps();
-    const float* a4 = reinterpret_cast<const float*>(a4_.data());
-    forEachParticleBlock(x_.size(), [&](size_t begin, size_t end) { sweeps.divergence(in, a4, 4, out.data(), begin, end); });
-}
-
-void FluidSimulation::divergence(const std::vector<Vec3>& u, std::vector<Real>& out) const {
-    out.resize(x_.size());
-    const PressureSweepInput in = sweepInput();
-    const PressureSweeps& sweeps = pressureSweeps();
-    const float* uf = reinterpret_cast<const float*>(u.data());
-    forEachParticleBlock(x_.size(), [&](size_t begin, size_t end) { sweeps.divergence(in, uf, 3, out.data(), begin, end); });
+    forEachParticleBlock(x_.size(), [&](size_t begin, size_t end) { pressureDivergence(begin, end, out.data()); });
 }
 
 } // namespace ferro
