@@ -185,7 +185,7 @@ void runShot(const SimScene& scene, const RunOptions& opt) {
     }
     if (!opt.quiet)
         std::cerr << "ferro-sim: " << sim.size() << " particles, spacing " << sim.spacing() * 1e3 << " mm, "
-                  << sim.pressureSolverLabel() << ", " << viscositySummary(sim) << ", "
+                  << sim.pressureSolverSummary() << ", " << viscositySummary(sim) << ", "
                   << sim.boundaryPositions().size() << " boundary particles"
                   << magnetSummary(sim) << "; "
                   << (resumed ? "resuming after frame " + std::to_string(frame) : std::string("starting"))

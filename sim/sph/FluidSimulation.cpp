@@ -6,6 +6,7 @@
 #include "sim/core/ParticleLoops.hpp"
 #include "sim/core/SceneDocument.hpp"
 #include "sim/magnetics/MagnetizationSolver.hpp"
+#include "sim/magnets/LangevinLaw.hpp"
 
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
@@ -149,6 +150,54 @@ void FluidSimulation::chooseSpeedScales() {
     soundSpeed_ = scene_.solver.soundSpeed > 0 ? scene_.solver.soundSpeed : 10 * std::max(vExpected, 0.1);
     viscosity_ = scene_.fluid.viscosity + scene_.solver.artificialViscosity * h_ * std::max(vExpected, 0.01);
     expectedSpeed_ = vExpected;
+}
+
+std::string FluidSimulation::pressureSolverSummary() const {
+    const std::string settings = solver_->settingsSummary();
+    return settings.empty() ? std::string(pressureSolverLabel()) : std::string(pressureSolverLabel()) + " (" + settings + ")";
+}
+
+double FluidSimulation::magneticFallSpeed() const {
+    const MagnetizationParams& law = scene_.magnetization;
+    if (scene_.magnets.empty() || !law.enabled()) return 0;
+    // Where the fluid can be: its fill and the walls' particles (a container keeps it in),
+    // each thinned to at most kPoints, since the largest field is near the walls or the fill
+    // and a few thousand samples find it. The field is the one FluidMagnetics applies:
+    // softened over at least a spacing, bounded inside the magnets' bodies.
+    constexpr size_t kPoints = 8192;
+    std::vector<Vec3d> points;
+    const auto addThinned = [&points](const std::vector<Vec3>& from) {
+        const size_t stride = std::max<size_t>(1, (from.size() + kPoints - 1) / kPoints);
+        for (size_t i = 0; i < from.size(); i += stride) points.push_back(from[i].cast<double>());
+    };
+    addThinned(x_);
+    addThinned(bx_);
+    if (points.empty()) return 0;
+    // Over the shot, a sample a frame (at most kTimes): the largest energy difference across
+    // those points at one time, which is what the fluid's pressure may have to hold.
+    constexpr int kTimes = 256;
+    const int times = std::clamp(scene_.shot.frameCount(), 1, kTimes);
+    double head = 0;
+    for (int k = 0; k <= times; ++k) {
+        std::vector<Magnet> magnets;
+        for (const MagnetTrack& track : scene_.magnets) {
+            magnets.push_back(track.at(scene_.shot.duration * k / times));
+            magnets.back().softening = std::max(magnets.back().softening, spacing_);
+        }
+        using Range = std::pair<double, double>;
+        const Range range = tbb::parallel_reduce(
+            tbb::blocked_range<size_t>(0, points.size()), Range{1e300, 0.0},
+            [&](const tbb::blocked_range<size_t>& r, Range acc) {
+                for (size_t i = r.begin(); i != r.end(); ++i) {
+                    const double F = langevinEnergy(magnetField(magnets, points[i]).norm(), law.susceptibility, law.saturation);
+                    acc = {std::min(acc.first, F), std::max(acc.second, F)};
+                }
+                return acc;
+            },
+            [](Range a, Range b) { return Range{std::min(a.first, b.first), std::max(a.second, b.second)}; });
+        head = std::max(head, range.second - range.first);
+    }
+    return std::sqrt(2 * kMu0 * head / rho0_);
 }
 
 double FluidSimulation::explicitViscousTimeStep() const { return pairForces_->viscousStepLimit(); }

@@ -97,6 +97,14 @@ public:
     double explicitViscousTimeStep() const;
     /// The pressure solver's label ("DFSPH", "WCSPH"), for progress lines and benchmarks.
     const char* pressureSolverLabel() const { return solverEntry_->label; }
+    /// The label and, in parentheses, the settings the solver chose (PressureSolver::settingsSummary).
+    std::string pressureSolverSummary() const;
+    /// The speed [m/s] of a fall through the magnets' largest energy difference over the
+    /// places the fluid can reach during the shot (its fill and the walls, a sample a frame):
+    /// sqrt(2 mu0 max dF / rho0) with F(H) = int M dH, the Langevin energy, in the softened
+    /// field the fluid feels; 0 without magnets or magnetization. The magnets' share of the
+    /// flow speed behind WCSPH's speed of sound (docs/physics/sph-solver.md).
+    double magneticFallSpeed() const;
     /// The sanity guard's speed bound as of the last step (sim/sph/SanityGuard.hpp).
     const SpeedBound& speedBound() const { return speedBound_; }
     /// Largest particle speed so far over the scene's energy speed (the guard stops at

@@ -43,6 +43,9 @@ public:
     /// Forgets any warm start: called at every frame start and on setState, so that a
     /// run resumed from a frame file continues exactly like an uninterrupted one.
     virtual void resetWarmStart() {}
+    /// The settings a run chose for this solver, for the start line (e.g. WCSPH's speed of
+    /// sound); empty when there is nothing to say.
+    virtual std::string settingsSummary() const { return {}; }
 };
 
 /// One registered solver: its scene name (`sim.solver`), its label in progress lines and

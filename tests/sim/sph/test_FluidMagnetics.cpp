@@ -517,6 +517,63 @@ TEST_CASE("a blob falling onto a bare magnet pole: finite, pulled toward it, kin
     if (force == "body") REQUIRE(far1 < far0);
 }
 
+// The magnets' fall speed behind WCSPH's sound-speed advice (FluidSimulation::magneticFallSpeed):
+// sqrt(2 mu0 dF / rho0), dF the largest difference of the Langevin energy F(H) = int M dH
+// across the places the fluid can be at one time of the shot. Reference: the energy F
+// evaluated here in closed form, Ms^2 / (3 chi0) ln(sinh(x) / x) with x = 3 chi0 H / Ms (not
+// the library's langevinEnergy), over every particle of the fill, with no container (so the
+// fill is all the places); for a magnet that approaches, at its last position, where the
+// difference is largest.
+TEST_CASE("the magnets' fall speed is the fall through the largest energy difference over the fill and the shot", "[magnetics]") {
+    SimScene scene = loadExample("ferrohydrostatic_pool.toml", {"shot.duration=1", "shot.fps=4"});
+    scene.container.type = ContainerParams::Type::None;
+    const double chi0 = scene.magnetization.susceptibility, Ms = scene.magnetization.saturation;
+    REQUIRE(Ms > 0);
+    const auto energy = [&](double H) {
+        const double x = 3 * chi0 * H / Ms;
+        return x < 1e-4 ? chi0 * H * H / 2 : Ms * Ms / (3 * chi0) * (x + std::log1p(-std::exp(-2 * x)) - std::log(2 * x));
+    };
+    const auto expected = [&](const FluidSimulation& sim, Magnet m) {
+        m.softening = std::max(m.softening, sim.spacing());
+        double lo = 1e300, hi = 0;
+        for (const Vec3& p : sim.positions()) {
+            const double F = energy(magnetField(m, p.cast<double>()).norm());
+            lo = std::min(lo, F);
+            hi = std::max(hi, F);
+        }
+        return std::sqrt(2 * 4e-7 * M_PI * (hi - lo) / sim.restDensity());
+    };
+    SECTION("a still magnet") {
+        const FluidSimulation sim(scene);
+        const double v = expected(sim, scene.magnets[0].at(0));
+        CAPTURE(v, sim.magneticFallSpeed());
+        REQUIRE(v > 1.0);   // the 3 A m^2 dipole 2 cm under the fill: a 1.4 m/s fall (1.8 with the walls)
+        REQUIRE(sim.magneticFallSpeed() == Approx(v).epsilon(1e-6));
+    }
+    SECTION("a magnet that approaches: the head at its closest") {
+        MagnetTrack& track = scene.magnets[0];
+        MagnetKeyframe far, near;
+        far.time = 0;
+        far.position = Vec3d(0, 0, -0.06);
+        near.time = 1;
+        near.position = Vec3d(0, 0, -0.02);
+        far.strength = near.strength = track.base.strength;
+        track.keys = {far, near};
+        const FluidSimulation sim(scene);
+        const double vNear = expected(sim, track.at(1)), vFar = expected(sim, track.at(0));
+        CAPTURE(vNear, vFar, sim.magneticFallSpeed());
+        REQUIRE(vNear > 3 * vFar);
+        REQUIRE(sim.magneticFallSpeed() == Approx(vNear).epsilon(1e-6));
+    }
+    SECTION("a uniform field holds no head, and no magnet none") {
+        scene.magnets[0].base.kind = MagnetKind::Uniform;
+        scene.magnets[0].base.strength = 2e4;
+        REQUIRE(FluidSimulation(scene).magneticFallSpeed() == 0);
+        scene.magnets.clear();
+        REQUIRE(FluidSimulation(scene).magneticFallSpeed() == 0);
+    }
+}
+
 TEST_CASE("a scene without magnets builds no magnetics at all", "[magnetics]") {
     FluidSimulation sim(loadExample("dish.toml", {"fluid.block.0.count=2000"}));
     REQUIRE(sim.magnetics() == nullptr);
