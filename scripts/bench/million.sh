@@ -180,7 +180,15 @@ magnetization is solved, the fluid has not moved yet), spikes over the middle of
   $(grep -c . <<< "$(grep '^frame' "$dir/sim.log")") frames; peak memory $(awk -v m="$sim_mb" -v n="$n" 'BEGIN { printf "%.0f", m * 1048576 / n }') bytes a particle. The poured
   layer is 24 particles deep here: DFSPH's Jacobi iterations grow with the depth in particles
   (the pressure has to travel through the column), so the density solve's work grows faster
-  than the particle count (not removed yet: the density solve at this depth is the open item).
+  than the particle count. It is the depth, not the count: the same dish narrowed to 40,960
+  particles at the same spacing and depth (radius 10.1 mm, 0.417 mm, 24 layers; measured once,
+  \`ferro-sim\` with \`--threads 1\`, 0.2 s) stops at the cap of 100 in 255 of 275 steps
+  with Jacobi, every step after the first frame, at 0.029 % against the 0.02 % asked, 0.58 s a
+  step. The conjugate-gradient iteration (\`sim.pressure_iteration = "cg"\`) needs 24 a step
+  there and meets the tolerance (0.014 %), at 0.30 s a step; only its first frame from the
+  cold fill (pressure built from zero) ends at the cap, where Jacobi did better (0.33 % against
+  0.04 %). So a deep layer asks for CG after a pre-roll; the default stays Jacobi, which the
+  shallow pools and tanks of the suite are measured with.
 - Cost a particle at 1,000,000 against 40,960 (the same scene with the magnet at 2 cm, frame 1;
   the million's \`near\` frame):
 
@@ -191,6 +199,13 @@ $(ratio_rows | sed 's/^/  /')
   The per-frame stages cost less a particle at a million (their work follows the surface
   and the tips, not the particles). The simulation costs more: its time step is smaller
   and its density solve does more iterations (see above).
+- What the compact cache saves is bytes, not processor time (measured once on frame 2 of the
+  million, written compact by a converter from its full file): ferro-surface with one thread
+  took 7.6-8.4 s CPU from either file (two runs each, same mesh positions), and a cold read
+  (page cache dropped) 0.03-0.04 s for the full file against 0.02 s on this machine's disk.
+  The 30 MB a frame it saves count where files cross a network: at the ~110 MB/s of a 1 GbE
+  NFS mount, 0.27 s for each stage that reads or writes a frame (the simulation's write, the
+  surface's and the spikes' reads: ~0.8 s a frame), and half the shot's disk.
 - The compact cache against the full one (40,960 particles, frame 1, magnet at 2 cm: spikes on
   the whole heap): the rendered images differ by RMSE $rmse (of full scale, over all 8-bit
   channels); compact frame $(stat -c %s "$work/small/compact/particles_0001.ply") bytes, full $(stat -c %s "$work/small/full/particles_0001.ply").
