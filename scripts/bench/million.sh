@@ -159,7 +159,7 @@ cat > "$out/million.md" <<MD
 ## The million-particle shot
 
 What ran: \`scripts/bench/million.sh\` on examples/million_dish.toml ($n particles, the Fig. 9
-dish at 0.43 mm spacing, the compact particle cache). The simulation makes frames 0..2 (frame
+dish at 0.42 mm spacing, the compact particle cache). The simulation makes frames 0..2 (frame
 1 compact, 2 full); surface, spikes, export and POV-Ray make frame 1 from its compact file,
 2 threads each. Wall and CPU seconds a frame (the simulation: wall seconds a simulated second,
 between frame 0's and frame 2's files); peak memory is the process's maximum resident set.
@@ -181,13 +181,13 @@ magnetization is solved, the fluid has not moved yet), spikes over the middle of
   layer is 24 particles deep here: DFSPH's Jacobi iterations grow with the depth in particles
   (the pressure has to travel through the column), so the density solve's work grows faster
   than the particle count. It is the depth, not the count: the same dish narrowed to 40,960
-  particles at the same spacing and depth (radius 10.1 mm, 0.417 mm, 24 layers; measured once,
+  particles at nearly the same spacing and depth (radius 10.1 mm, 0.417 mm against 0.423 mm, 24 layers; measured once,
   \`ferro-sim\` with \`--threads 1\`, 0.2 s) stops at the cap of 100 in 255 of 275 steps
   with Jacobi, every step after the first frame, at 0.029 % against the 0.02 % asked, 0.58 s a
   step. The conjugate-gradient iteration (\`sim.pressure_iteration = "cg"\`) needs 24 a step
   there and meets the tolerance (0.014 %), at 0.30 s a step; only its first frame from the
-  cold fill (pressure built from zero) ends at the cap, where Jacobi did better (0.33 % against
-  0.04 %). So a deep layer asks for CG after a pre-roll; the default stays Jacobi, which the
+  cold fill (pressure built from zero) ends at the cap, where Jacobi did better (CG 0.33 %,
+  Jacobi 0.04 % left). So a deep layer asks for CG after a pre-roll; the default stays Jacobi, which the
   shallow pools and tanks of the suite are measured with.
 - Cost a particle at 1,000,000 against 40,960 (the same scene with the magnet at 2 cm, frame 1;
   the million's \`near\` frame):

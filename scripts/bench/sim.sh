@@ -8,7 +8,7 @@
 #
 # Particle ladder: 640 / 2,560 / 10,240 particles in the half dish (the spacings of 2.5k / 10k /
 # 41k in the full dish); BENCH_SIM_164K=1 adds 40,960 (164k in the full dish, 0.77 mm), which
-# then becomes the ladder's reference. That one run is about 30 CPU minutes on an idle core,
+# then becomes the ladder's reference. That one run is about 23 CPU minutes on an idle core,
 # more than the rest of this script together, so it is not in the default ladder.
 #
 # Every run simulates SETTLE seconds from the flat fill (1.5 s; the heap forms and settles);
@@ -163,8 +163,8 @@ last 0.5 s the base run's profile changes by ${settle_um} um RMS, under the erro
   $(join_rows spacing_mm " / ") mm, the spacings of $(for n in "${counts[@]}"; do awk -v n="$n" 'BEGIN { x = 4 * n / 1000; printf (x < 10 ? "%.1fk\n" : "%.0fk\n"), x }'; done | paste -sd/ | sed 's|/| / |g')
   particles in the full dish of examples/dish.toml. The finest, ${fine} particles, is the
   reference of the ladder: its own error is zero by definition, and the others' errors are
-  against it, not against the exact solution. $(if ((fine >= 40960)); then fs="$("$bench_bin/bench-heap-profile" "$(sim_last_frame "$cache" "p$fine")" --summary)"; echo "Its particles end at $(awk -v v="$(kv "$fs" rms_speed_m_s)" 'BEGIN { printf "%.2f", 1e3 * v }') mm/s RMS (column rms_speed_mm_s), the fastest at $(awk -v v="$(kv "$fs" max_speed_m_s)" 'BEGIN { printf "%.1f", 1e3 * v }') mm/s: at rest (issue 29's bound: under 1 mm/s RMS, none over 10 mm/s; before the step's force criterion was fixed this rung ended at 15 mm/s with floor particles at 0.4-0.75 m/s)."; fi) $(if ((fine < 40960)); then echo "The issue's 164k rung (0.77 mm, 40960
-  particles here) is not in this run: \`BENCH_SIM_164K=1\` adds it (about 30 CPU minutes for one run)."; fi)
+  against it, not against the exact solution. $(if ((fine >= 40960)); then fs="$("$bench_bin/bench-heap-profile" "$(sim_last_frame "$cache" "p$fine")" --summary)"; echo "Its particles end at $(awk -v v="$(kv "$fs" rms_speed_m_s)" 'BEGIN { printf "%.2f", 1e3 * v }') mm/s RMS (column rms_speed_mm_s), the fastest at $(awk -v v="$(kv "$fs" max_speed_m_s)" 'BEGIN { printf "%.1f", 1e3 * v }') mm/s: $(awk -v r="$(kv "$fs" rms_speed_m_s)" -v m="$(kv "$fs" max_speed_m_s)" 'BEGIN { print (r < 1e-3 && m < 1e-2) ? "at rest" : "NOT at rest" }') by issue 29's bound (under 1 mm/s RMS, none over 10 mm/s; before the step's force criterion was fixed this rung ended at 15 mm/s with floor particles at 0.4-0.75 m/s)."; fi) $(if ((fine < 40960)); then echo "The issue's 164k rung (0.77 mm, 40960
+  particles here) is not in this run: \`BENCH_SIM_164K=1\` adds it (about 23 CPU minutes for one run)."; fi)
 - **Cost noise**: the ${counts[0]}-particle run three times took $(cat "$cache"/sim/p${counts[0]}{,_rep1,_rep2}/cost | awk '{ c[NR] = $2; if (NR == 1 || $2 < lo) lo = $2; if ($2 > hi) hi = $2 } END { printf "%.2f / %.2f / %.2f CPU s (spread %.0f %% of the least)", c[1], c[2], c[3], 100 * (hi - lo) / lo }'): cost
   differences of that order between rows are noise.
 - **Budget**: the runs of this section take $(cat "$cache"/sim/{p*,refB,wcsph,tol*,dt*,cfl*}/cost 2>/dev/null | awk '{ c += $2; if ($2 > m) m = $2 } END { w = c / 2 > m ? c / 2 : m; printf "%.0f CPU s in all, the longest run %.0f: two runs at a time on an idle 2-core machine, about %.0f min", c, m, w / 60 }')

@@ -190,6 +190,8 @@ void runShot(const SimScene& scene, const RunOptions& opt) {
                   << magnetSummary(sim) << "; "
                   << (resumed ? "resuming after frame " + std::to_string(frame) : std::string("starting"))
                   << ", frames to " << lastFrame << "\n";
+    if (!opt.quiet)
+        if (const std::string advice = sim.pressureSolverAdvice(); !advice.empty()) std::cerr << "ferro-sim: note: " << advice << "\n";
 
     using Clock = std::chrono::steady_clock;
     const auto start = Clock::now();

@@ -157,13 +157,17 @@ std::string FluidSimulation::pressureSolverSummary() const {
     return settings.empty() ? std::string(pressureSolverLabel()) : std::string(pressureSolverLabel()) + " (" + settings + ")";
 }
 
+std::string FluidSimulation::pressureSolverAdvice() const { return solver_->advice(); }
+
 double FluidSimulation::magneticFallSpeed() const {
     const MagnetizationParams& law = scene_.magnetization;
     if (scene_.magnets.empty() || !law.enabled()) return 0;
-    // Where the fluid can be: its fill and the walls' particles (a container keeps it in),
-    // each thinned to at most kPoints, since the largest field is near the walls or the fill
-    // and a few thousand samples find it. The field is the one FluidMagnetics applies:
-    // softened over at least a spacing, bounded inside the magnets' bodies.
+    // Where the fluid can be: its fill, and the walls' fluid side (samples half a spacing
+    // in from each wall, where the first fluid layer's centres sit; the boundary particles
+    // lie as far inside the solid, closer to a magnet under the floor than any fluid gets).
+    // Each is thinned to at most kPoints: the largest field is at a wall or in the fill, and
+    // a few thousand samples find it. The field is the one FluidMagnetics applies: softened
+    // over at least a spacing, bounded inside the magnets' bodies.
     constexpr size_t kPoints = 8192;
     std::vector<Vec3d> points;
     const auto addThinned = [&points](const std::vector<Vec3>& from) {
@@ -171,7 +175,12 @@ double FluidSimulation::magneticFallSpeed() const {
         for (size_t i = 0; i < from.size(); i += stride) points.push_back(from[i].cast<double>());
     };
     addThinned(x_);
-    addThinned(bx_);
+    if (scene_.container.type != ContainerParams::Type::None) {
+        std::vector<Vec3> fluidSide;
+        for (const Vec3& p : container_->sampleWalls(spacing_, -0.5 * spacing_))
+            if (container_->contains(p.cast<double>(), 0)) fluidSide.push_back(p);
+        addThinned(fluidSide);
+    }
     if (points.empty()) return 0;
     // Over the shot, a sample a frame (at most kTimes): the largest energy difference across
     // those points at one time, which is what the fluid's pressure may have to hold.

@@ -99,11 +99,16 @@ public:
     const char* pressureSolverLabel() const { return solverEntry_->label; }
     /// The label and, in parentheses, the settings the solver chose (PressureSolver::settingsSummary).
     std::string pressureSolverSummary() const;
+    /// The pressure solver's advice about this scene (PressureSolver::advice), or empty.
+    std::string pressureSolverAdvice() const;
     /// The speed [m/s] of a fall through the magnets' largest energy difference over the
-    /// places the fluid can reach during the shot (its fill and the walls, a sample a frame):
-    /// sqrt(2 mu0 max dF / rho0) with F(H) = int M dH, the Langevin energy, in the softened
-    /// field the fluid feels; 0 without magnets or magnetization. The magnets' share of the
-    /// flow speed behind WCSPH's speed of sound (docs/physics/sph-solver.md).
+    /// places the fluid can reach during the shot (its fill and the walls' fluid side, a
+    /// sample a frame, at most 256): sqrt(2 mu0 max dF / rho0) with F(H) = int M dH, the
+    /// Langevin energy of the magnets' softened field; 0 without magnets or magnetization.
+    /// The body force's potential for `external` magnetization; an upper bound with a
+    /// self-consistent solve (the particles' own field lowers M). Fluid that leaves the
+    /// fill's region without a container is not counted. Behind WCSPH's sound-speed advice
+    /// (docs/physics/sph-solver.md).
     double magneticFallSpeed() const;
     /// The sanity guard's speed bound as of the last step (sim/sph/SanityGuard.hpp).
     const SpeedBound& speedBound() const { return speedBound_; }

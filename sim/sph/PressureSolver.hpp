@@ -46,6 +46,9 @@ public:
     /// The settings a run chose for this solver, for the start line (e.g. WCSPH's speed of
     /// sound); empty when there is nothing to say.
     virtual std::string settingsSummary() const { return {}; }
+    /// One line of advice about the scene for this solver, printed after the start line
+    /// (e.g. WCSPH under a strong magnet); empty when there is none.
+    virtual std::string advice() const { return {}; }
 };
 
 /// One registered solver: its scene name (`sim.solver`), its label in progress lines and
