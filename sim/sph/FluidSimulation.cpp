@@ -160,14 +160,14 @@ std::string FluidSimulation::pressureSolverSummary() const {
 std::string FluidSimulation::pressureSolverAdvice() const { return solver_->advice(); }
 
 double FluidSimulation::magneticFallSpeed() const {
-    const MagnetizationParams& law = scene_.magnetization;
-    if (scene_.magnets.empty() || !law.enabled()) return 0;
+    if (!magnetics_ || !magnetics_->magnetic()) return 0;
+    const MagnetizationParams& law = magnetics_->law();
     // Where the fluid can be: its fill, and the walls' fluid side (samples half a spacing
     // in from each wall, where the first fluid layer's centres sit; the boundary particles
     // lie as far inside the solid, closer to a magnet under the floor than any fluid gets).
     // Each is thinned to at most kPoints: the largest field is at a wall or in the fill, and
-    // a few thousand samples find it. The field is the one FluidMagnetics applies: softened
-    // over at least a spacing, bounded inside the magnets' bodies.
+    // a few thousand samples find it. The field is the one FluidMagnetics applies
+    // (softenedMagnetsAt: softened over at least a spacing, bounded inside the bodies).
     constexpr size_t kPoints = 8192;
     std::vector<Vec3d> points;
     const auto addThinned = [&points](const std::vector<Vec3>& from) {
@@ -188,11 +188,7 @@ double FluidSimulation::magneticFallSpeed() const {
     const int times = std::clamp(scene_.shot.frameCount(), 1, kTimes);
     double head = 0;
     for (int k = 0; k <= times; ++k) {
-        std::vector<Magnet> magnets;
-        for (const MagnetTrack& track : scene_.magnets) {
-            magnets.push_back(track.at(scene_.shot.duration * k / times));
-            magnets.back().softening = std::max(magnets.back().softening, spacing_);
-        }
+        const std::vector<Magnet> magnets = magnetics_->softenedMagnetsAt(scene_.shot.duration * k / times);
         using Range = std::pair<double, double>;
         const Range range = tbb::parallel_reduce(
             tbb::blocked_range<size_t>(0, points.size()), Range{1e300, 0.0},
