@@ -109,7 +109,7 @@ double spikeDisplacement(const SpikeSurface& surface, const Vec3d& x, const Vec3
     constexpr double eps = 1e-3;
     double spacing = 0;
     for (size_t p = 0; p < patterns.size(); ++p) spacing += dominance.share(p) * patterns[p].info.spacing;
-    const double localC0 = std::min(P.beta * H.norm(), P.maxAspect * spacing / 3.0) * fields.heightFade(x, H);
+    const double localC0 = spikeAmplitude(P, H.norm(), spacing) * fields.heightFade(x, H);
     const double C0 = (A + eps * localC0) / (WA + eps);
     const Vec3d dir = growthDirection(D + eps * growthDirection(H, nx, P.maxTilt), nx, P.maxTilt);
     weight = fade * coverage;

@@ -113,6 +113,63 @@ bool dropOnSurface(const TraceFrame& f, const Vec3d& x, Vec3d& s, Vec3d& n)
     return true;
 }
 
+// The art director's irregularity (SpikeParams::jitter, defects): three numbers in [0, 1) per
+// tip, a fixed function of the seed, the pattern's magnet and the tip's lattice coordinates
+// (splitmix64), so a tip keeps its offset and its fate from frame to frame however the
+// pattern moves, and a frame is still made alone.
+struct TipNoise {
+    double radius, angle, fate;
+};
+TipNoise tipNoise(uint32_t seed, int magnet, int i, int j)
+{
+    uint64_t x = (uint64_t(seed) << 32) ^ (uint64_t(uint32_t(magnet)) * 0x9E3779B97F4A7C15ull) ^
+                 (uint64_t(uint32_t(i)) << 16) ^ (uint64_t(uint32_t(j)) * 0xC2B2AE3D27D4EB4Full);
+    auto next = [&x]() {
+        x += 0x9E3779B97F4A7C15ull;
+        uint64_t z = x;
+        z = (z ^ (z >> 30)) * 0xBF58476D1CE4E5B9ull;
+        z = (z ^ (z >> 27)) * 0x94D049BB133111EBull;
+        z ^= z >> 31;
+        return double(z >> 11) * 0x1.0p-53;
+    };
+    TipNoise n;
+    n.radius = next();
+    n.angle = next();
+    n.fate = next();
+    return n;
+}
+
+// Jitter: each tip moved within a disc of radius jitter l in its tangent plane (uniform over
+// the disc: radius sqrt(u)), along axes from the pattern's e1 (which comes from a fixed world
+// direction), then dropped onto the surface along the field line as the traced tips are. The
+// lattice maps are built afterwards from the moved tips, so the profile follows them.
+void jitterTips(const TraceFrame& f, LatticeTips& lattice, const SpikeParams& P, int magnet)
+{
+    if (!(P.jitter > 0)) return;
+    for (Tip& tip : lattice.tips) {
+        const TipNoise noise = tipNoise(P.seed, magnet, tip.i, tip.j);
+        Vec3d t1 = f.e1 - f.e1.dot(tip.normal) * tip.normal;
+        if (!(t1.norm() > 1e-9)) continue;
+        t1.normalize();
+        const Vec3d t2 = tip.normal.cross(t1);
+        const double r = P.jitter * f.l * std::sqrt(noise.radius), a = 2 * kPi * noise.angle;
+        Vec3d s, n;
+        if (dropOnSurface(f, tip.position + r * (std::cos(a) * t1 + std::sin(a) * t2), s, n)) {
+            tip.position = s;
+            tip.normal = n;
+        }
+    }
+}
+
+// Defects: a tip whose fate falls under the defect fraction d is left out; fates within 0.05
+// above d sink gradually, so a d raised over keys takes the tips away one by one instead of
+// popping them. d = 0 keeps every tip whole.
+double tipPresence(const SpikeParams& P, int magnet, int i, int j)
+{
+    if (!(P.defects > 0)) return 1.0;
+    return smoothstep01((tipNoise(P.seed, magnet, i, j).fate - P.defects) / 0.05 + 1.0);
+}
+
 // Supercritical at surface point s with normal n: |M| > M_c.
 bool alive(const TraceFrame& f, const Vec3d& s, const Vec3d& n)
 {
@@ -221,6 +278,11 @@ Eigen::Matrix<double, 2, 3> tipLatticeMap(const TraceFrame& f, const LatticeTips
 
 } // namespace
 
+double spikeAmplitude(const SpikeParams& P, double field, double spacing)
+{
+    return P.heightGain * std::min(P.beta * field, P.maxAspect * spacing / 3.0);
+}
+
 bool nearestFreeHit(const FreeSurface& surface, const Vec3d& p, const Vec3d& d, double maxDistance, Vec3d& hit,
                     Vec3d& normal)
 {
@@ -245,14 +307,16 @@ void traceLattice(Pattern& pat, const FreeSurface& surface, const SurfaceFields&
     std::vector<Vec3d> axisTips[6];
     traceAxes(frame, int(std::ceil(diagonal / l)) + 1, lattice, axisTips);
     pat.info.rings = fillRings(frame, axisTips, lattice);
+    jitterTips(frame, lattice, P, pat.info.magnet);
     for (Tip& tip : lattice.tips) tip.toLattice = tipLatticeMap(frame, lattice, tip);
     pat.tips = std::move(lattice.tips);
     // Eq. 14 at each tip: C0 = beta |H|, capped so the tip stands at most maxAspect l above
-    // the mean level, faded in from M_c; the spike grows along the tip's field.
+    // the mean level, faded in from M_c, times the art director's gain and the tip's presence
+    // (defects); the spike grows along the tip's field.
     for (Tip& tip : pat.tips) {
         const Vec3d H = fields.field(tip.position, tip.normal);
-        tip.amplitude = std::min(P.beta * H.norm(), P.maxAspect * l / 3.0) *
-                        fields.heightFade(tip.position, H);
+        tip.amplitude = spikeAmplitude(P, H.norm(), l) * fields.heightFade(tip.position, H) *
+                        tipPresence(P, pat.info.magnet, tip.i, tip.j);
         tip.direction = growthDirection(H, tip.normal, P.maxTilt);
     }
     std::vector<Vec3d> positions;

@@ -31,6 +31,10 @@ struct FreeSurface {
 bool nearestFreeHit(const FreeSurface& surface, const Vec3d& p, const Vec3d& d, double maxDistance, Vec3d& hit,
                     Vec3d& normal);
 
+/// Eq. 14's C0 [m] for the field |H| = field [A/m] and tip spacing [m]: beta |H|, capped at
+/// maxAspect spacing / 3 (the tip stands 3 C0 above the mean level), times heightGain.
+double spikeAmplitude(const SpikeParams& P, double field, double spacing);
+
 /// One tip of a pattern on the undisplaced surface.
 struct Tip {
     int i, j;                              // lattice coordinates (eq. 13's e1, e2 steps from x0)
@@ -57,9 +61,10 @@ struct Pattern {
 /// stepped point meets the surface, within 0.75 l), for at
 /// most ceil(diagonal / l) + 1 rings [diagonal in m] and until two tips in a row are subcritical
 /// (|M| <= Mc [A/m]); tips between two axes interpolate the two n-th axis tips (Fig. 7c) and
-/// are dropped the same way. Fills pat.tips (each with its lattice map from its neighbours'
-/// positions, its amplitude C0 = min(beta |H|, maxAspect l / 3) times the magnetization fade,
-/// eq. 14, and its growth direction), pat.info.rings and pat.grid.
+/// are dropped the same way. With P.jitter each tip then moves by its fixed random offset (up
+/// to jitter l, from seed, magnet and (i, j)) and is dropped again. Fills pat.tips (each with its lattice map from its neighbours'
+/// positions, its amplitude spikeAmplitude times the magnetization fade and its presence under
+/// P.defects, eq. 14, and its growth direction), pat.info.rings and pat.grid.
 void traceLattice(Pattern& pat, const FreeSurface& surface, const SurfaceFields& fields, const SpikeParams& P,
                   double Mc, double diagonal);
 

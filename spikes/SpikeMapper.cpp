@@ -420,14 +420,17 @@ Vec3d totalFieldAt(const SpikeInput& input, const Vec3d& x)
     return H;
 }
 
-SpikeResult addSpikes(const SpikeInput& in, const SpikeParams& P, const SpikeInput* earlier, double interval)
+SpikeResult addSpikes(const SpikeInput& in, const SpikeParams& params, const SpikeInput* earlier, double interval)
 {
     SpikeResult res;
+    // The look at the frame's time ([[spikes.keys]]), and at the earlier input's for the velocities.
+    const SpikeParams P = spikeParamsAt(params, in.time);
     const double g = in.fluid.gravity.norm();
     res.critical = criticalMagnetization(in.fluid.density - P.ambientDensity, g, in.fluid.surfaceTension, in.fluid.law);
     res.volumeIn = enclosedVolume(in.surface);
     const double Mc = res.critical.magnetization;
     const SpikeInput* before = interval > 0 ? earlier : nullptr;
+    const SpikeParams Pthen = before ? spikeParamsAt(params, before->time) : P;
     if (!P.enabled || in.magnets.empty() || !std::isfinite(Mc) || in.surface.empty())
         return unchangedResult(std::move(res), in.surface);
 
@@ -439,7 +442,7 @@ SpikeResult addSpikes(const SpikeInput& in, const SpikeParams& P, const SpikeInp
         // No spikes now; spikes that were there a moment ago sink where they stood.
         res = unchangedResult(std::move(res), in.surface);
         if (before && !res.mesh.velocities.empty())
-            addSinkingVelocity(res.mesh.velocities, in.surface, *before, P, Mc, res.volumeIn, interval);
+            addSinkingVelocity(res.mesh.velocities, in.surface, *before, Pthen, Mc, res.volumeIn, interval);
         return res;
     }
 
@@ -453,7 +456,7 @@ SpikeResult addSpikes(const SpikeInput& in, const SpikeParams& P, const SpikeInp
     const std::vector<Vec3> surfaceVelocity = surfaceVelocityAt(in.surface, refined.mesh.vertices);
     if (!surfaceVelocity.empty())
         res.mesh.velocities = spikyVelocities(res.mesh, refined, surfaceVelocity, displaced.weight, patterns,
-                                              tipMotions(patterns, before, P, Mc, interval));
+                                              tipMotions(patterns, before, Pthen, Mc, interval));
     computeVertexNormals(res.mesh);
     res.refined = std::move(refined.mesh);
 

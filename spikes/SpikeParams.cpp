@@ -1,8 +1,33 @@
 #include "spikes/SpikeParams.hpp"
 
+#include "sim/core/Keyframes.hpp"
 #include "sim/core/SceneDocument.hpp"
 
+#include <climits>
+#include <limits>
+
 namespace ferro {
+
+namespace {
+
+// The ranges of the animated keys, shared by [spikes] and [[spikes.keys]].
+double heightGain(const TableReader& r, double def) { return r.numberInRange("height_gain", def, 0, 4); }
+double sharpness(const TableReader& r, double def) { return r.numberInRange("sharpness", def, 1, 8); }
+double jitter(const TableReader& r, double def) { return r.numberInRange("jitter", def, 0, 0.35); }
+double defects(const TableReader& r, double def) { return r.numberInRange("defects", def, 0, 0.9); }
+
+} // namespace
+
+SpikeParams spikeParamsAt(const SpikeParams& p, double t)
+{
+    SpikeParams q = p;
+    if (p.keys.empty()) return q;
+    q.heightGain = monotoneKeyValue(p.keys, t, [](const SpikeKey& k) { return k.heightGain; }, p.heightGain);
+    q.sharpness = monotoneKeyValue(p.keys, t, [](const SpikeKey& k) { return k.sharpness; }, p.sharpness);
+    q.jitter = monotoneKeyValue(p.keys, t, [](const SpikeKey& k) { return k.jitter; }, p.jitter);
+    q.defects = monotoneKeyValue(p.keys, t, [](const SpikeKey& k) { return k.defects; }, p.defects);
+    return q;
+}
 
 SpikeParams parseSpikeParams(const SceneDocument& doc)
 {
@@ -18,7 +43,11 @@ SpikeParams parseSpikeParams(const SceneDocument& doc)
     if (p.maxSpacing < p.minSpacing)
         r.fail("max_spacing", "must be >= min_spacing");
     p.maxAspect = r.positive("max_aspect", p.maxAspect);
-    p.sharpness = r.numberInRange("sharpness", p.sharpness, 1, 8);
+    p.sharpness = sharpness(r, p.sharpness);
+    p.heightGain = heightGain(r, p.heightGain);
+    p.jitter = jitter(r, p.jitter);
+    p.defects = defects(r, p.defects);
+    p.seed = uint32_t(r.integerInRange("seed", 0, 0, INT_MAX));
     p.magnetizationFade = r.positive("magnetization_fade", p.magnetizationFade);
     p.growthTime = r.nonNegative("growth_time", p.growthTime);
     p.wallMargin = r.nonNegative("wall_margin", p.wallMargin);
@@ -32,6 +61,23 @@ SpikeParams parseSpikeParams(const SceneDocument& doc)
     p.maxTilt = r.numberInRange("max_tilt", p.maxTilt, 0, 80);   // degrees
     p.particleField = r.boolean("particle_field", p.particleField);
     p.conserveVolume = r.boolean("conserve_volume", p.conserveVolume);
+    double lastTime = -std::numeric_limits<double>::infinity();
+    for (const TableReader& k : r.tables("keys")) {
+        if (!k.has("time"))
+            k.fail("time", "every [[spikes.keys]] needs a time");
+        SpikeKey key;
+        key.time = k.nonNegative("time", 0.0);
+        if (key.time < lastTime)
+            k.fail("time", "keys must be in time order (got " + formatNumber(key.time) + " after " +
+                               formatNumber(lastTime) + ")");
+        lastTime = key.time;
+        key.heightGain = heightGain(k, p.heightGain);
+        key.sharpness = sharpness(k, p.sharpness);
+        key.jitter = jitter(k, p.jitter);
+        key.defects = defects(k, p.defects);
+        k.finish();
+        p.keys.push_back(key);
+    }
     r.finish();
     return p;
 }

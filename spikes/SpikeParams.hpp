@@ -3,9 +3,22 @@
 // Every default here is the documented default of the scene key in examples/annotated.toml.
 #include "sim/core/Types.hpp"
 
+#include <cstdint>
+#include <vector>
+
 namespace ferro {
 
 class SceneDocument;
+
+/// One [[spikes.keys]] entry: the look's animated values at `time` [s]. A key that leaves a
+/// value out holds the [spikes] section's value there.
+struct SpikeKey {
+    double time = 0;        ///< [s]
+    double heightGain = 1;  ///< SpikeParams::heightGain at this time
+    double sharpness = 1;   ///< SpikeParams::sharpness
+    double jitter = 0;      ///< SpikeParams::jitter
+    double defects = 0;     ///< SpikeParams::defects
+};
 
 struct SpikeParams {
     /// How the tip spacing l (distance between neighbouring tips) is chosen.
@@ -24,6 +37,19 @@ struct SpikeParams {
     double maxAspect = 1.0;          ///< cap of tip height (3 C0) over tip spacing l, > 0
     double sharpness = 1.0;          ///< profile exponent p >= 1: 1 = eq. 13 exactly; larger p narrows
                                      ///< the spikes into cones over flat troughs (same tips, same spacing)
+    // The art director's keys (keyframable with [[spikes.keys]]). They change the look, not
+    // where the physics puts the pattern: the defaults leave the paper's spikes untouched.
+    double heightGain = 1.0;         ///< factor on every tip's height (after the aspect cap), >= 0,
+                                     ///< at most 4; 0 = a flat, heaped surface
+    double jitter = 0.0;             ///< tip positions moved along the surface by up to this fraction
+                                     ///< of the tip spacing l, in [0, 0.35]; each tip's offset is a
+                                     ///< fixed function of seed, magnet and lattice coordinates, so a
+                                     ///< tip keeps its offset from frame to frame as the pattern moves
+    double defects = 0.0;            ///< fraction of tips left out (missing spikes), in [0, 0.9];
+                                     ///< which tips is again fixed by seed and lattice coordinates, and
+                                     ///< raising it over keys sinks tips one by one (each over a 0.05 band)
+    uint32_t seed = 0;               ///< the irregularity's random seed (jitter and defects)
+    std::vector<SpikeKey> keys;      ///< [[spikes.keys]] in time order; empty = the values above
     double magnetizationFade = 0.25; ///< height ramps from 0 at |M| = M_c to full at (1 + fade) M_c
     /// Spikes follow the field with this time constant [s], >= 0: a spike's height is the
     /// heights its |M| gave over the past, averaged with weight exp(-(t - t') / growthTime),
@@ -53,6 +79,11 @@ struct SpikeParams {
     bool particleField = true;       ///< add the magnetized particles' own field to the magnets'
     bool conserveVolume = true;      ///< restore the enclosed volume after displacement
 };
+
+/// The parameters at time t [s]: heightGain, sharpness, jitter and defects interpolated between
+/// the keys (monotone cubic, sim/core/Keyframes.hpp: never past a key's value), the rest as
+/// given. No keys: a copy of p.
+SpikeParams spikeParamsAt(const SpikeParams& p, double t);
 
 /// Parses the scene's [spikes] section (absent = defaults); unknown keys are errors (SceneError).
 SpikeParams parseSpikeParams(const SceneDocument& doc);

@@ -2,6 +2,7 @@
 #include "sim/magnets/MagnetKinds.hpp"
 
 #include "sim/core/Constants.hpp"
+#include "sim/core/Keyframes.hpp"
 
 #include <Eigen/Geometry> // cross, unitOrthogonal
 
@@ -52,14 +53,6 @@ Mat3d fieldGradient(const std::vector<Magnet>& magnets, const Vec3d& x) {
 
 namespace {
 
-// Cubic Hermite basis on u in [0, 1]; tangents are per unit time, hence the dt factor.
-template <class T>
-T hermite(const T& p0, const T& p1, const T& m0, const T& m1, double dt, double u) {
-    const double u2 = u * u, u3 = u2 * u;
-    return (2 * u3 - 3 * u2 + 1) * p0 + (u3 - 2 * u2 + u) * dt * m0 + (-2 * u3 + 3 * u2) * p1 +
-           (u3 - u2) * dt * m1;
-}
-
 // Catmull-Rom tangent at key j for uneven spacing: central difference over the two
 // neighbours, one-sided at the ends. Coincident key times degrade to a zero tangent.
 Vec3d positionTangent(const std::vector<MagnetKeyframe>& k, size_t j) {
@@ -70,22 +63,10 @@ Vec3d positionTangent(const std::vector<MagnetKeyframe>& k, size_t j) {
     return (k[hi].position - k[lo].position) / dt;
 }
 
-double secant(const std::vector<MagnetKeyframe>& k, size_t i) {
-    const double dt = k[i + 1].time - k[i].time;
-    return dt > 0.0 ? (k[i + 1].strength - k[i].strength) / dt : 0.0;
-}
-
-// Fritsch-Butland (PCHIP) tangent: weighted harmonic mean of the adjacent secants, zero at
-// a local extremum, so the interpolant stays monotone between keys and never overshoots.
+// The strength channel's monotone tangent (sim/core/Keyframes.hpp): a strength keyed up and
+// down never overshoots its keys.
 double strengthTangent(const std::vector<MagnetKeyframe>& k, size_t j) {
-    const size_t n = k.size();
-    if (j == 0) return secant(k, 0);
-    if (j == n - 1) return secant(k, n - 2);
-    const double d0 = secant(k, j - 1), d1 = secant(k, j);
-    if (d0 * d1 <= 0.0) return 0.0;
-    const double h0 = k[j].time - k[j - 1].time, h1 = k[j + 1].time - k[j].time;
-    const double w0 = 2 * h1 + h0, w1 = h1 + 2 * h0;
-    return (w0 + w1) / (w0 / d0 + w1 / d1);
+    return monotoneTangent(k, j, [](const MagnetKeyframe& key) { return key.strength; });
 }
 
 // Slerp between unit vectors a and b. Antiparallel keys have no unique great circle; any
@@ -123,9 +104,7 @@ Magnet MagnetTrack::at(double t) const {
     if (t >= keys.back().time) return apply(keys.back());
 
     // Segment i with keys[i].time <= t < keys[i+1].time.
-    const auto it = std::upper_bound(keys.begin(), keys.end(), t,
-                                     [](double v, const MagnetKeyframe& k) { return v < k.time; });
-    const size_t i = size_t(it - keys.begin()) - 1;
+    const size_t i = keySegment(keys, t);
     const MagnetKeyframe& k0 = keys[i];
     const MagnetKeyframe& k1 = keys[i + 1];
     const double dt = k1.time - k0.time;

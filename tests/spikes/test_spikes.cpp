@@ -18,6 +18,7 @@
 #include <map>
 #include <optional>
 #include <random>
+#include <set>
 #include <sstream>
 
 using namespace ferro;
@@ -514,4 +515,177 @@ TEST_CASE("spikes in a still field stand where the field lays them out while the
     }
     CHECK(flat > 100);
     CHECK(apexes > 5);
+}
+
+// ---------------------------------------------------------------------------------------
+// The art director's keys: height_gain, jitter, defects, seed and [[spikes.keys]].
+
+namespace {
+
+// Tips by lattice coordinates.
+std::map<std::pair<int, int>, SpikeTip> tipsByIndex(const SpikeResult& res)
+{
+    std::map<std::pair<int, int>, SpikeTip> m;
+    for (const SpikeTip& t : res.tips) m[{t.i, t.j}] = t;
+    return m;
+}
+
+// A uniform field of 15 kA/m over a flat pool of radius 3 cm: ~70 tips 6.7 mm apart.
+constexpr double kLookR = 0.03, kLookH = 15000;
+
+SpikeResult lookFrame(const std::string& spikes, double time = 0.0, double lift = 0.0,
+                      const std::vector<std::string>& overrides = {})
+{
+    const SpikeScene sc = scene(sceneText(kLookR, uniformField(kLookH) + "[spikes]\n" + spikes), overrides);
+    return addSpikes(frameInput(sc, makeFlatPool(kLookR, kDepth + lift, 20), time), sc.params);
+}
+
+} // namespace
+
+TEST_CASE("spikes.height_gain scales every tip's height by the gain and keeps the volume", "[spikes][look]")
+{
+    const SpikeResult base = lookFrame(""), taller = lookFrame("height_gain = 1.8\n"),
+                      lower = lookFrame("height_gain = 0.4\n");
+    REQUIRE(base.tips.size() >= 40);
+    const auto a = tipsByIndex(base), b = tipsByIndex(taller), c = tipsByIndex(lower);
+    REQUIRE(b.size() == a.size());
+    REQUIRE(c.size() == a.size());
+    for (const auto& [ij, tip] : a) {
+        REQUIRE(b.at(ij).height == Approx(1.8 * tip.height).epsilon(1e-9));
+        REQUIRE(c.at(ij).height == Approx(0.4 * tip.height).epsilon(1e-9));
+        REQUIRE((b.at(ij).base - tip.base).norm() < 1e-12); // the gain moves no tip
+    }
+    requireHealthy(taller);
+    requireHealthy(lower);
+    // Gain 0: no spike stands, the surface keeps its volume.
+    const SpikeResult flat = lookFrame("height_gain = 0.0\n");
+    REQUIRE(flat.tips.empty());
+    REQUIRE(std::abs(flat.volumeOut - flat.volumeIn) <= 0.005 * flat.volumeIn);
+    REQUIRE_THROWS_AS(lookFrame("height_gain = -1.0\n"), SceneError);
+}
+
+TEST_CASE("spikes.jitter moves each tip within jitter l, uniformly over the disc, by the same offset in every frame",
+          "[spikes][look]")
+{
+    const SpikeResult regular = lookFrame(""), jittered = lookFrame("jitter = 0.25\nseed = 7\n");
+    const double l = regular.patterns.at(0).spacing;
+    const double R = 0.25 * l;
+    const auto a = tipsByIndex(regular), b = tipsByIndex(jittered);
+    // The jitter decides where tips are, not which: the same lattice coordinates (the outermost
+    // ring may gain or lose a tip at the wall fade).
+    int matched = 0;
+    double sumR2 = 0;
+    Vec3d sum = Vec3d::Zero();
+    std::map<std::pair<int, int>, Vec3d> offset;
+    for (const auto& [ij, tip] : a) {
+        if (!b.count(ij)) continue;
+        const Vec3d d = b.at(ij).base - tip.base;
+        REQUIRE(std::abs(b.at(ij).base.z() - (kDepth)) < 1e-6); // still on the (flat) surface
+        REQUIRE(d.norm() <= R * (1 + 1e-6));
+        offset[ij] = d;
+        sumR2 += d.squaredNorm() / (R * R);
+        sum += d;
+        ++matched;
+    }
+    INFO("matched " << matched << " of " << a.size());
+    REQUIRE(matched >= int(a.size()) - 6);
+    // Uniform over the disc: r^2 / R^2 is uniform on [0, 1], mean 1/2, standard deviation of
+    // the mean sqrt(1/12 / N) (0.035 for 70 tips); the mean offset is 0 within
+    // R / sqrt(2 N) per axis. Bounds at 4 standard deviations.
+    const double N = matched;
+    REQUIRE(std::abs(sumR2 / N - 0.5) < 4 * std::sqrt(1.0 / 12 / N));
+    REQUIRE((sum / N).norm() < 4 * R / std::sqrt(2 * N));
+    // The next frame, the pool 1 mm higher: every tip keeps its offset; another seed does not.
+    const SpikeResult next = lookFrame("jitter = 0.25\nseed = 7\n", 1.0, 0.001);
+    const SpikeResult nextRegular = lookFrame("", 1.0, 0.001);
+    const auto n = tipsByIndex(next), nr = tipsByIndex(nextRegular);
+    const auto other = tipsByIndex(lookFrame("jitter = 0.25\nseed = 8\n"));
+    int same = 0, differ = 0;
+    for (const auto& [ij, d] : offset) {
+        if (!n.count(ij) || !nr.count(ij)) continue;
+        REQUIRE((n.at(ij).base - nr.at(ij).base - d).norm() < 1e-6 * l);
+        ++same;
+        if (other.count(ij) && (other.at(ij).base - a.at(ij).base - d).norm() > 0.05 * l) ++differ;
+    }
+    REQUIRE(same >= matched - 6);
+    REQUIRE(differ >= same / 2);
+    requireHealthy(jittered);
+}
+
+TEST_CASE("spikes.defects leaves out the fraction of tips asked, and a larger fraction only takes more away",
+          "[spikes][look]")
+{
+    // Many tips for the statistics: alpha 40 A (tips 2.7 mm apart, ~380 in the pool), the mesh
+    // barely refined (the tips' heights do not depend on it), five seeds pooled.
+    const std::vector<std::string> dense = {"spikes.alpha=40", "spikes.resolution=3", "spikes.remesh_iterations=0"};
+    const auto a = tipsByIndex(lookFrame("", 0.0, 0.0, dense));
+    auto missing = [&](const std::string& spikes) {
+        // A tip is missing when it stands under half its regular height (or not at all).
+        std::set<std::pair<int, int>> gone;
+        const auto b = tipsByIndex(lookFrame(spikes, 0.0, 0.0, dense));
+        for (const auto& [ij, tip] : a)
+            if (!b.count(ij) || b.at(ij).height < 0.5 * tip.height) gone.insert(ij);
+        return gone;
+    };
+    // Each tip's fate is uniform on [0, 1); under half height means fate < d - 0.025 (the 0.05
+    // band a key sinks tips over): a binomial fraction d - 0.025 of the tips, bounds at 4
+    // standard deviations (0.04 for 5 x 380 tips).
+    for (const double d : {0.2, 0.45}) {
+        double gone = 0, N = 0;
+        for (int seed = 1; seed <= 5; ++seed) {
+            gone += double(missing("defects = " + std::to_string(d) + "\nseed = " + std::to_string(seed) + "\n").size());
+            N += double(a.size());
+        }
+        const double p = d - 0.025;
+        INFO("defects " << d << ": " << gone << " of " << N << " tips missing");
+        REQUIRE(N >= 1500);
+        REQUIRE(std::abs(gone / N - p) < 4 * std::sqrt(p * (1 - p) / N));
+    }
+    // Raising the fraction only takes more tips away; another seed takes others.
+    const auto some = missing("defects = 0.2\nseed = 3\n"), more = missing("defects = 0.45\nseed = 3\n");
+    for (const auto& ij : some) REQUIRE(more.count(ij) == 1);
+    REQUIRE(missing("defects = 0.45\nseed = 4\n") != more);
+    REQUIRE(missing("defects = 0.0\nseed = 3\n").empty());
+}
+
+TEST_CASE("[[spikes.keys]] animate the look: the keys' values at their times, monotone between, none passed",
+          "[spikes][look]")
+{
+    const std::string keys = "[[spikes.keys]]\ntime = 0.0\n"
+                             "[[spikes.keys]]\ntime = 1.0\nheight_gain = 2.0\nsharpness = 3.0\n"
+                             "[[spikes.keys]]\ntime = 2.0\nheight_gain = 2.0\nsharpness = 1.5\n";
+    const SpikeScene sc = scene(sceneText(kLookR, uniformField(kLookH) + "[spikes]\n" + keys));
+    REQUIRE(sc.params.keys.size() == 3);
+    // A key that leaves a value out holds the section's value (gain 1, sharpness 1).
+    REQUIRE(spikeParamsAt(sc.params, -1.0).heightGain == 1.0);
+    REQUIRE(spikeParamsAt(sc.params, 0.0).heightGain == 1.0);
+    REQUIRE(spikeParamsAt(sc.params, 1.0).heightGain == 2.0);
+    REQUIRE(spikeParamsAt(sc.params, 1.0).sharpness == 3.0);
+    REQUIRE(spikeParamsAt(sc.params, 5.0).sharpness == 1.5);
+    double lastGain = 0;
+    for (double t = 0; t <= 2.0001; t += 0.05) {
+        const SpikeParams p = spikeParamsAt(sc.params, t);
+        REQUIRE(p.heightGain >= lastGain);  // 1 -> 2 -> 2: rising, then flat, never above 2
+        REQUIRE(p.heightGain <= 2.0);
+        REQUIRE(p.sharpness >= 1.0);       // 1 -> 3 -> 1.5: never past a key
+        REQUIRE(p.sharpness <= 3.0);
+        if (t > 1.0) REQUIRE(p.heightGain == Approx(2.0).margin(1e-12));
+        lastGain = p.heightGain;
+    }
+    // A frame between keys: its tips at the interpolated gain.
+    const double t = 0.5, gain = spikeParamsAt(sc.params, t).heightGain;
+    REQUIRE(gain > 1.0);
+    REQUIRE(gain < 2.0);
+    const auto base = tipsByIndex(addSpikes(frameInput(sc, makeFlatPool(kLookR, kDepth, 20), 0.0), sc.params));
+    SpikeInput in = frameInput(sc, makeFlatPool(kLookR, kDepth, 20), t);
+    in.time = t;
+    const auto animated = tipsByIndex(addSpikes(in, sc.params));
+    REQUIRE(animated.size() == base.size());
+    for (const auto& [ij, tip] : base) REQUIRE(animated.at(ij).height == Approx(gain * tip.height).epsilon(1e-9));
+    // Bad keys: out of order, no time, a value out of range.
+    REQUIRE_THROWS_AS(scene(sceneText(kLookR, "[spikes]\n[[spikes.keys]]\ntime = 1.0\n[[spikes.keys]]\ntime = 0.5\n")),
+                      SceneError);
+    REQUIRE_THROWS_AS(scene(sceneText(kLookR, "[spikes]\n[[spikes.keys]]\nheight_gain = 2.0\n")), SceneError);
+    REQUIRE_THROWS_AS(scene(sceneText(kLookR, "[spikes]\n[[spikes.keys]]\ntime = 0.0\njitter = 0.5\n")), SceneError);
+    REQUIRE_THROWS_AS(scene(sceneText(kLookR, "[spikes]\n[[spikes.keys]]\ntime = 0.0\nspacing = 2.0\n")), SceneError);
 }
