@@ -31,6 +31,7 @@ struct TipSums {
 TipSums sumNearbyTips(const Pattern& pat, const Vec3d& x)
 {
     const double R = pat.info.spacing, Rn = 0.75 * R;
+    const bool square = pat.info.lattice == SpikeParams::Lattice::Square;
     TipSums sums;
     pat.grid->forEachWithin(x, R, [&](uint32_t t, double d2) {
         const Tip& tip = pat.tips[t];
@@ -38,7 +39,7 @@ TipSums sumNearbyTips(const Pattern& pat, const Vec3d& x)
         const double q = 1.0 - d2 / (R * R);
         const double wt = q * q * tip.ownership;
         const Eigen::Vector2d ab = tip.toLattice * (x - tip.position);
-        sums.s += wt * hexProfile(ab.x(), ab.y());
+        sums.s += wt * (square ? squareProfile(ab.x(), ab.y()) : hexProfile(ab.x(), ab.y()));
         sums.w += wt;
         if (d2 < Rn * Rn) {
             const double qn = 1.0 - d2 / (Rn * Rn);

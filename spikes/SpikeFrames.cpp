@@ -34,6 +34,11 @@ SpikeScene parseSpikeScene(const SceneDocument& doc)
     SpikeScene scene;
     scene.params = parseSpikeParams(doc);
     scene.magnets = sim.magnets;
+    for (const auto& [magnet, lattice] : scene.params.magnetLattice)
+        if (size_t(magnet) >= scene.magnets.size())
+            throw SceneError(doc.path() + ": [[spikes.magnets]] magnet = " + std::to_string(magnet) +
+                             ": the scene has " + std::to_string(scene.magnets.size()) +
+                             " magnet(s), numbered from 0");
     scene.fps = sim.shot.fps;
     SpikeFluid& fluid = scene.fluid;
     fluid.density = sim.fluid.restDensity;

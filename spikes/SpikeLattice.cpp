@@ -73,6 +73,7 @@ struct TraceFrame {
     Vec3d x0, n0, e1, e1perp;
     double l;
     double maxTilt;   // [deg] the drop direction's largest angle from n0 (SpikeParams::maxTilt)
+    bool square;      // the square planform: e2 = e1perp instead of 60 degrees from e1
 };
 
 // The tips traced so far; the first tip at lattice coordinates (i, j) wins.
@@ -176,36 +177,71 @@ bool alive(const TraceFrame& f, const Vec3d& s, const Vec3d& n)
     return f.fields.magnetization(s, f.fields.field(s, n)) > f.Mc;
 }
 
-// Fig. 7b: adds the origin tip and traces the six axes from x0 along the surface with step l
-// (eq. 15: along the tangent plane of the mean normal at the previous tip, SmoothNormals), at
-// most maxRings tips per axis, until two subcritical tips in a row after a supercritical one
-// (a subcritical origin, the top of a heap less magnetized than its flanks, does not end the
-// axis). Returns per axis k the traced points, x0 first [m].
+// One line of tips from the tip at s (unit normal n, supercritical if startAlive, lattice
+// coordinates (i, j)) in direction d
+// with lattice step (di, dj), along the surface with step l (eq. 15: along the tangent plane of
+// the mean normal at the previous tip, SmoothNormals), at most maxRings tips, until two
+// subcritical tips in a row after a supercritical one (a subcritical start, the top of a heap
+// less magnetized than its flanks, does not end the line). Appends the traced points to
+// `points` [m].
+void traceLine(const TraceFrame& f, Vec3d s, Vec3d n, bool startAlive, Vec3d d, int i, int j, int di, int dj,
+               int maxRings, LatticeTips& lattice, std::vector<Vec3d>* points)
+{
+    int dead = 0;
+    bool lived = startAlive; // a line ends two dead tips after its last live one
+    for (int ring = 1; ring <= maxRings && dead < 2; ++ring) {
+        d = d - d.dot(n) * n; // eq. 15: step along the tangent plane at the previous tip
+        if (!(d.norm() > 1e-12)) break;
+        d.normalize();
+        Vec3d next, nextNormal;
+        if (!dropOnSurface(f, s + f.l * d, next, nextNormal)) break;
+        s = next;
+        n = nextNormal;
+        if (points) points->push_back(s);
+        addTip(lattice, i + ring * di, j + ring * dj, s, n);
+        const bool live = alive(f, s, n);
+        lived = lived || live;
+        dead = live ? 0 : lived ? dead + 1 : 0;
+    }
+}
+
+// Fig. 7b: adds the origin tip and traces the six axes from x0 (traceLine). Returns per axis k
+// the traced points, x0 first [m].
 void traceAxes(const TraceFrame& f, int maxRings, LatticeTips& lattice, std::vector<Vec3d> (&axisTips)[6])
 {
-    const double l = f.l;
     addTip(lattice, 0, 0, f.x0, f.n0);
     for (int k = 0; k < 6; ++k) {
-        Vec3d s = f.x0, n = f.normals.at(f.x0, f.n0);
-        Vec3d d = std::cos(k * kPi / 3) * f.e1 + std::sin(k * kPi / 3) * f.e1perp;
+        const Vec3d d = std::cos(k * kPi / 3) * f.e1 + std::sin(k * kPi / 3) * f.e1perp;
         axisTips[k].push_back(f.x0);
-        int dead = 0;
-        bool lived = alive(f, f.x0, f.n0); // an axis ends two dead tips after its last live one
-        for (int ring = 1; ring <= maxRings && dead < 2; ++ring) {
-            d = d - d.dot(n) * n; // eq. 15: step along the tangent plane at the previous tip
-            if (!(d.norm() > 1e-12)) break;
-            d.normalize();
-            Vec3d next, nextNormal;
-            if (!dropOnSurface(f, s + l * d, next, nextNormal)) break;
-            s = next;
-            n = nextNormal;
-            axisTips[k].push_back(s);
-            addTip(lattice, ring * kAxis[k][0], ring * kAxis[k][1], s, n);
-            const bool live = alive(f, s, n);
-            lived = lived || live;
-            dead = live ? 0 : lived ? dead + 1 : 0;
-        }
+        traceLine(f, f.x0, f.normals.at(f.x0, f.n0), alive(f, f.x0, f.n0), d, 0, 0, kAxis[k][0], kAxis[k][1],
+                  maxRings, lattice, &axisTips[k]);
     }
+}
+
+// The square planform's tips: the i axis traced both ways from x0, then from each of its tips a
+// row both ways along e2 (90 degrees from e1), every line by traceLine. Rings around x0 would
+// be diamonds (|i| + |j| = r between two axes) that miss the corners of a round supercritical
+// region; rows reach every tip the region holds. Returns the most tips a line reached.
+int traceSquare(const TraceFrame& f, int maxRings, LatticeTips& lattice)
+{
+    addTip(lattice, 0, 0, f.x0, f.n0);
+    std::vector<Vec3d> axis[2] = {{f.x0}, {f.x0}};
+    const Vec3d n0 = f.normals.at(f.x0, f.n0);
+    const bool live0 = alive(f, f.x0, f.n0);
+    traceLine(f, f.x0, n0, live0, f.e1, 0, 0, 1, 0, maxRings, lattice, &axis[0]);
+    traceLine(f, f.x0, n0, live0, -f.e1, 0, 0, -1, 0, maxRings, lattice, &axis[1]);
+    int most = int(std::max(axis[0].size(), axis[1].size())) - 1;
+    for (int side = 0; side < 2; ++side)
+        for (size_t r = 0; r < axis[side].size(); ++r) {
+            const int i = side == 0 ? int(r) : -int(r);
+            const Vec3d s = axis[side][r], n = f.normals.at(s, f.n0);
+            for (const int dj : {1, -1}) {
+                std::vector<Vec3d> row;
+                traceLine(f, s, n, alive(f, s, n), double(dj) * f.e1perp, i, 0, 0, dj, maxRings, lattice, &row);
+                most = std::max(most, int(row.size()));
+            }
+        }
+    return most;
 }
 
 // Fig. 7c: the tips between axes k and k + 1 on ring r interpolate the two r-th axis tips and
@@ -247,7 +283,7 @@ Eigen::Matrix<double, 2, 3> tipLatticeMap(const TraceFrame& f, const LatticeTips
         if (hasMinus) return Vec3d(tip.position - minus);
         return Vec3d(l * (flat - flat.dot(tip.normal) * tip.normal).normalized());
     };
-    const Vec3d f1 = e1, f2 = 0.5 * e1 + std::sqrt(0.75) * e1perp;
+    const Vec3d f1 = e1, f2 = f.square ? e1perp : Vec3d(0.5 * e1 + std::sqrt(0.75) * e1perp);
     auto frame = [&](const Vec3d& b1, const Vec3d& b2) {
         Eigen::Matrix3d A;
         A.col(0) = b1;
@@ -302,11 +338,17 @@ void traceLattice(Pattern& pat, const FreeSurface& surface, const SurfaceFields&
     const double l = pat.info.spacing;
     const Vec3d n0 = pat.info.normal, e1 = pat.info.axis;
     const SmoothNormals normals(surface, 0.5 * l);
-    const TraceFrame frame{surface, normals, fields, Mc, pat.info.origin, n0, e1, n0.cross(e1), l, P.maxTilt};
+    const bool square = pat.info.lattice == SpikeParams::Lattice::Square;
+    const TraceFrame frame{surface, normals, fields, Mc, pat.info.origin, n0, e1, n0.cross(e1), l, P.maxTilt, square};
     LatticeTips lattice;
-    std::vector<Vec3d> axisTips[6];
-    traceAxes(frame, int(std::ceil(diagonal / l)) + 1, lattice, axisTips);
-    pat.info.rings = fillRings(frame, axisTips, lattice);
+    const int maxRings = int(std::ceil(diagonal / l)) + 1;
+    if (square) {
+        pat.info.rings = traceSquare(frame, maxRings, lattice);
+    } else {
+        std::vector<Vec3d> axisTips[6];
+        traceAxes(frame, maxRings, lattice, axisTips);
+        pat.info.rings = fillRings(frame, axisTips, lattice);
+    }
     jitterTips(frame, lattice, P, pat.info.magnet);
     for (Tip& tip : lattice.tips) tip.toLattice = tipLatticeMap(frame, lattice, tip);
     pat.tips = std::move(lattice.tips);

@@ -118,13 +118,15 @@ bool patternOrigin(const PlacementContext& c, const Magnet& magnet, const Vec3d&
 }
 
 // The tip spacing l [m], clamped to [P.minSpacing, P.maxSpacing]: eq. 15, l = alpha / |H(x0)|
-// with field H0 [A/m] at the origin, or 2 / sqrt(3) times the critical wavelength (g [m/s^2]).
-double tipSpacing(const SpikeInput& in, const SpikeParams& P, double g, const Vec3d& H0)
+// with field H0 [A/m] at the origin, or the tip distance of the critical wavenumber
+// k = 2 pi / lambda_c (g [m/s^2]) on the planform: 2 lambda_c / sqrt3 on a hexagon, lambda_c
+// on a square.
+double tipSpacing(const SpikeInput& in, const SpikeParams& P, double g, const Vec3d& H0, SpikeParams::Lattice lattice)
 {
-    double l = P.spacing == SpikeParams::Spacing::Paper
-                   ? P.alpha / std::max(H0.norm(), 1e-30)
-                   : 2.0 / std::sqrt(3.0) *
-                         criticalWavelength(in.fluid.density - P.ambientDensity, g, in.fluid.surfaceTension);
+    const double lambda = criticalWavelength(in.fluid.density - P.ambientDensity, g, in.fluid.surfaceTension);
+    double l = P.spacing == SpikeParams::Spacing::Paper  ? P.alpha / std::max(H0.norm(), 1e-30)
+               : lattice == SpikeParams::Lattice::Square ? lambda
+                                                         : 2.0 / std::sqrt(3.0) * lambda;
     return std::clamp(l, P.minSpacing, P.maxSpacing);
 }
 
@@ -173,7 +175,8 @@ std::vector<Pattern> placePatterns(const PlacementContext& c, double g, double M
         pat.info.normal = n0;
         pat.info.field = H0.norm();
         pat.info.magnetization = M0;
-        pat.info.spacing = tipSpacing(in, c.P, g, H0);
+        pat.info.lattice = c.P.latticeOf(int(m));
+        pat.info.spacing = tipSpacing(in, c.P, g, H0, pat.info.lattice);
         pat.info.axis = latticeAxis(n0, c.P.orientation);
         bool duplicate = false;
         for (const Pattern& other : patterns)
@@ -281,7 +284,7 @@ std::vector<Pattern> tracePatterns(const SpikeInput& in, const SpikeParams& P, c
         placePatterns(PlacementContext{in, P, fields, freeSurface, region.active, diagonal}, g, Mc);
     if (patterns.empty()) return {};
 
-    // 3. Tips (Fig. 7): trace six axes along the surface, fill the rings between them.
+    // 3. Tips (Fig. 7): trace the axes along the surface (six, or four on a square), fill the rings between them.
     for (Pattern& pat : patterns) traceLattice(pat, freeSurface, fields, P, Mc, diagonal);
     settleSeams(patterns, in.magnets);
     return patterns;

@@ -82,12 +82,14 @@ struct SpikePattern {
     double spacing = 0;     ///< tip spacing l [m]
     double field = 0;       ///< |H(x0)| [A/m]
     double magnetization = 0; ///< |M(x0)| [A/m]
-    int rings = 0;          ///< hexagonal rings traced around x0
+    int rings = 0;          ///< rings traced around x0
+    SpikeParams::Lattice lattice = SpikeParams::Lattice::Hexagon; ///< the planform (SpikeParams::latticeOf)
 };
 
 struct SpikeTip {
     int pattern = -1;
     int i = 0, j = 0;       ///< lattice coordinates: base = x0 + i l e1 + j l e2 on a flat surface
+                            ///< (e2 at 60 degrees from e1 on a hexagon, 90 on a square)
     Vec3d base;             ///< tip position on the undisplaced surface [m]
     Vec3d apex;             ///< base + height * direction [m]
     Vec3d direction;        ///< unit growth direction (the local field, outward)

@@ -55,6 +55,22 @@ SpikeParams parseSpikeParams(const SceneDocument& doc)
     p.resolution = r.numberInRange("resolution", p.resolution, 3, 100);
     p.remeshIterations = r.integerInRange("remesh_iterations", p.remeshIterations, 0, 20);
     p.ambientDensity = r.nonNegative("ambient_density", p.ambientDensity);
+    auto lattice = [](const TableReader& t, SpikeParams::Lattice def) {
+        return t.choice("pattern", {"hexagon", "square"}, def == SpikeParams::Lattice::Square ? "square" : "hexagon") ==
+                       "square"
+                   ? SpikeParams::Lattice::Square
+                   : SpikeParams::Lattice::Hexagon;
+    };
+    p.lattice = lattice(r, p.lattice);
+    for (const TableReader& m : r.tables("magnets")) {
+        if (!m.has("magnet"))
+            m.fail("magnet", "every [[spikes.magnets]] names the magnet it overrides (its index in [[magnets]], from 0)");
+        const int index = m.integerInRange("magnet", 0, 0, INT_MAX);
+        for (const auto& [other, l] : p.magnetLattice)
+            if (other == index) m.fail("magnet", "magnet " + std::to_string(index) + " is overridden twice");
+        p.magnetLattice.emplace_back(index, lattice(m, p.lattice));
+        m.finish();
+    }
     p.hasOrigin = r.has("origin");
     p.origin = r.vec3("origin", p.origin);
     p.orientation = r.number("orientation", p.orientation);

@@ -21,6 +21,11 @@ struct SpikeKey {
 };
 
 struct SpikeParams {
+    /// The planform of a magnet's spikes (eq. 12 with three or two wave vectors).
+    enum class Lattice {
+        Hexagon, ///< eq. 13: three wave vectors 120 degrees apart, tips on a triangular lattice (the paper)
+        Square   ///< two wave vectors 90 degrees apart, tips on a square lattice (squarePattern)
+    };
     /// How the tip spacing l (distance between neighbouring tips) is chosen.
     enum class Spacing {
         Paper,    ///< eq. 15: l = alpha / |H(x0)|, so tips crowd as the field grows
@@ -29,6 +34,15 @@ struct SpikeParams {
     };
     bool enabled = true;             ///< false: copy the surface unchanged
     Spacing spacing = Spacing::Paper;
+    Lattice lattice = Lattice::Hexagon; ///< every magnet's planform unless magnetLattice says otherwise
+    std::vector<std::pair<int, Lattice>> magnetLattice; ///< [[spikes.magnets]]: (magnet index, planform)
+    /// The planform of magnet m's spikes (m indexes the scene's [[magnets]]).
+    Lattice latticeOf(int m) const
+    {
+        for (const auto& [magnet, l] : magnetLattice)
+            if (magnet == m) return l;
+        return lattice;
+    }
     double alpha = 60.0;             ///< eq. 15 constant [A]: l = 1 cm at |H(x0)| = 6 kA/m
     double beta = 1.5e-7;            ///< eq. 14 constant [m per A/m]: C0 = beta |H|; tips stand 3 C0
                                      ///< above the mean level, troughs 1.5 C0 below

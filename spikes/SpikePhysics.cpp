@@ -69,6 +69,12 @@ double hexProfile(double a, double b)
     return std::cos(2 * kPi * (a + b)) + std::cos(2 * kPi * a) + std::cos(2 * kPi * b);
 }
 
+double squareProfile(double a, double b)
+{
+    const double g = 0.5 * (std::cos(2 * kPi * a) + std::cos(2 * kPi * b));
+    return 2.25 * g + g * g - 0.25;
+}
+
 double sharpenedProfile(double F, double p)
 {
     if (p == 1.0) return F;

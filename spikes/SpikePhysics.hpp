@@ -45,6 +45,15 @@ inline double wavenumberForTipSpacing(double l) { return 4.0 * kPi / (1.73205080
 /// F = 3 at the tips (integer a, b), -1.5 at the centres of the lattice triangles; mean 0.
 double hexProfile(double a, double b);
 
+/// The square planform in the same units, tips at integer lattice coordinates (a, b) of
+/// orthogonal steps l: with g = (cos 2 pi a + cos 2 pi b) / 2 (eq. 12 with two wave vectors
+/// at 90 degrees, k = 2 pi / l),
+///     F = 2.25 g + g^2 - 0.25,
+/// the lowest-order profile with eq. 13's range and mean: F = 3 at the tips, -1.5 at the
+/// cell centres, mean 0 (mean g^2 = 1/4), monotone in g. So the heights (C0, tips 3 C0 above
+/// the mean level), the sharpening and the volume work unchanged on either planform.
+double squareProfile(double a, double b);
+
 /// The profile of height F (in [-1.5, 3]) narrowed by exponent p >= 1:
 /// 4.5 ((F + 1.5) / 4.5)^p - 1.5. p = 1 is F itself; tips stay at 3, troughs at -1.5.
 double sharpenedProfile(double F, double p);

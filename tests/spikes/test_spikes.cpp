@@ -689,3 +689,98 @@ TEST_CASE("[[spikes.keys]] animate the look: the keys' values at their times, mo
     REQUIRE_THROWS_AS(scene(sceneText(kLookR, "[spikes]\n[[spikes.keys]]\ntime = 0.0\njitter = 0.5\n")), SceneError);
     REQUIRE_THROWS_AS(scene(sceneText(kLookR, "[spikes]\n[[spikes.keys]]\ntime = 0.0\nspacing = 2.0\n")), SceneError);
 }
+
+TEST_CASE("the square planform: tips 3, cell centres -1.5, mean zero, four-fold", "[spikes][physics]")
+{
+    // g = (cos 2 pi a + cos 2 pi b) / 2 is the square planform of eq. 12 (two wave vectors at
+    // 90 degrees); F = 2.25 g + g^2 - 0.25 keeps eq. 13's range and mean.
+    REQUIRE(squareProfile(0, 0) == Approx(3.0));
+    REQUIRE(squareProfile(2, -1) == Approx(3.0));
+    REQUIRE(squareProfile(0.5, 0.5) == Approx(-1.5));
+    REQUIRE(squareProfile(0.5, 0) == Approx(-0.25)); // the saddle between two tips
+    double mean = 0;
+    const int n = 200;
+    for (int i = 0; i < n; ++i)
+        for (int j = 0; j < n; ++j) {
+            const double a = (i + 0.5) / n, b = (j + 0.5) / n;
+            mean += squareProfile(a, b);
+            REQUIRE(squareProfile(a, b) == Approx(squareProfile(-b, a)).margin(1e-12)); // 90 degrees
+            REQUIRE(squareProfile(a, b) <= 3.0);
+            REQUIRE(squareProfile(a, b) >= -1.5);
+        }
+    REQUIRE(mean / (n * n) == Approx(0.0).margin(1e-9));
+}
+
+TEST_CASE("spikes.pattern = square: tips on a square lattice at l, four neighbours at l and four at l sqrt2",
+          "[spikes][look]")
+{
+    const SpikeResult res = lookFrame("pattern = \"square\"\n");
+    REQUIRE(res.patterns.size() == 1);
+    REQUIRE(res.patterns[0].lattice == SpikeParams::Lattice::Square);
+    const double l = res.patterns[0].spacing;
+    REQUIRE(l == Approx(100.0 / kLookH)); // eq. 15 as on a hexagon
+    // Interior tips (two spacings inside the outermost): exactly four neighbours at l and four
+    // at l sqrt2, none closer.
+    double rMax = 0;
+    for (const SpikeTip& t : res.tips) rMax = std::max(rMax, (t.base - res.patterns[0].origin).norm());
+    int interior = 0;
+    for (const SpikeTip& t : res.tips) {
+        if ((t.base - res.patterns[0].origin).norm() > rMax - 2 * l) continue;
+        int atL = 0, atDiag = 0;
+        for (const SpikeTip& u : res.tips) {
+            if (&u == &t) continue;
+            const double d = (u.base - t.base).norm();
+            REQUIRE(d > 0.95 * l);
+            if (std::abs(d - l) < 0.02 * l) ++atL;
+            if (std::abs(d - std::sqrt(2.0) * l) < 0.02 * l) ++atDiag;
+        }
+        REQUIRE(atL == 4);
+        REQUIRE(atDiag == 4);
+        ++interior;
+    }
+    INFO("tips " << res.tips.size() << ", interior " << interior);
+    REQUIRE(interior >= 12);
+    // The pattern covers the round supercritical pool, not a diamond: tips along the diagonals
+    // reach as far out as along the axes.
+    double diagonalReach = 0, axisReach = 0;
+    for (const SpikeTip& t : res.tips) {
+        const double r = (t.base - res.patterns[0].origin).norm();
+        if (t.i == t.j) diagonalReach = std::max(diagonalReach, r);
+        if (t.j == 0) axisReach = std::max(axisReach, r);
+    }
+    REQUIRE(diagonalReach > axisReach - 1.5 * l);
+    REQUIRE(res.maxHeight == Approx(std::min(3 * 1.5e-7 * kLookH, l)).epsilon(0.01));
+    requireHealthy(res);
+    // Physical spacing on a square: the critical wavelength itself.
+    const SpikeResult physical = lookFrame("pattern = \"square\"\nspacing = \"physical\"\n");
+    REQUIRE(physical.patterns.at(0).spacing ==
+            Approx(criticalWavelength(1200 - 1.2, 9.81, 0.025)).epsilon(1e-9));
+}
+
+TEST_CASE("[[spikes.magnets]] gives one magnet its own planform; the other keeps the hexagon", "[spikes][look]")
+{
+    const double R = 0.045;
+    const std::string magnets = dipolePair(-0.02, -0.02, 0.025, -0.025, 1.5);
+    const SpikeScene sc =
+        scene(sceneText(R, magnets + "[spikes]\n[[spikes.magnets]]\nmagnet = 0\npattern = \"square\"\n"));
+    const SpikeResult res = addSpikes(frameInput(sc, makeFlatPool(R, kDepth, 30)), sc.params);
+    REQUIRE(res.patterns.size() == 2);
+    for (const SpikePattern& p : res.patterns)
+        REQUIRE(p.lattice == (p.magnet == 0 ? SpikeParams::Lattice::Square : SpikeParams::Lattice::Hexagon));
+    // The square pattern (the stronger magnet's) first ring: (+-1, 0), (0, +-1) at l from the origin along e1 and e2 = e1 rotated 90 deg.
+    int ring = 0;
+    for (const SpikeTip& t : res.tips) {
+        const SpikePattern& p = res.patterns[size_t(t.pattern)];
+        if (p.magnet != 0 || std::abs(t.i) + std::abs(t.j) != 1) continue;
+        REQUIRE((t.base - p.origin).norm() == Approx(p.spacing).epsilon(0.03));
+        ++ring;
+    }
+    REQUIRE(ring == 4);
+    requireHealthy(res);
+    REQUIRE_THROWS_AS(scene(sceneText(R, magnets + "[spikes]\n[[spikes.magnets]]\nmagnet = 2\npattern = \"square\"\n")),
+                      SceneError);
+    REQUIRE_THROWS_AS(scene(sceneText(R, magnets + "[spikes]\n[[spikes.magnets]]\npattern = \"square\"\n")),
+                      SceneError);
+    REQUIRE_THROWS_AS(scene(sceneText(R, magnets + "[spikes]\n[[spikes.magnets]]\nmagnet = 0\npattern = \"squares\"\n")),
+                      SceneError);
+}
