@@ -39,7 +39,9 @@ TipSums sumNearbyTips(const Pattern& pat, const Vec3d& x)
         const double q = 1.0 - d2 / (R * R);
         const double wt = q * q * tip.ownership;
         const Eigen::Vector2d ab = tip.toLattice * (x - tip.position);
-        sums.s += wt * (square ? squareProfile(ab.x(), ab.y()) : hexProfile(ab.x(), ab.y()));
+        // A tip left out (defects) lends the blend a flat surface instead of its profile, so
+        // the gap is a smooth patch rather than a peakless ring of troughs.
+        sums.s += wt * tip.presence * (square ? squareProfile(ab.x(), ab.y()) : hexProfile(ab.x(), ab.y()));
         sums.w += wt;
         if (d2 < Rn * Rn) {
             const double qn = 1.0 - d2 / (Rn * Rn);

@@ -260,6 +260,12 @@ bool earlierSpikeInput(const SpikeScene& scene, const SpikeInput& in, double int
                 moved = moved || a.position != b.position || a.direction != b.direction || a.strength != b.strength;
             }
     }
+    // A look keyed by [[spikes.keys]] that changed over the interval moves the spikes too
+    // (a gain ramped up grows them, so they carry that growth as velocity).
+    const SpikeParams lookNow = spikeParamsAt(scene.params, in.time),
+                      lookThen = spikeParamsAt(scene.params, in.time - interval);
+    moved = moved || lookNow.heightGain != lookThen.heightGain || lookNow.sharpness != lookThen.sharpness ||
+            lookNow.jitter != lookThen.jitter || lookNow.defects != lookThen.defects;
     if (!moved) return false;
     earlier = in;
     earlier.time = in.time - interval;

@@ -357,8 +357,8 @@ void traceLattice(Pattern& pat, const FreeSurface& surface, const SurfaceFields&
     // (defects); the spike grows along the tip's field.
     for (Tip& tip : pat.tips) {
         const Vec3d H = fields.field(tip.position, tip.normal);
-        tip.amplitude = spikeAmplitude(P, H.norm(), l) * fields.heightFade(tip.position, H) *
-                        tipPresence(P, pat.info.magnet, tip.i, tip.j);
+        tip.presence = tipPresence(P, pat.info.magnet, tip.i, tip.j);
+        tip.amplitude = spikeAmplitude(P, H.norm(), l) * fields.heightFade(tip.position, H) * tip.presence;
         tip.direction = growthDirection(H, tip.normal, P.maxTilt);
     }
     std::vector<Vec3d> positions;

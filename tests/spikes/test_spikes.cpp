@@ -784,3 +784,33 @@ TEST_CASE("[[spikes.magnets]] gives one magnet its own planform; the other keeps
     REQUIRE_THROWS_AS(scene(sceneText(R, magnets + "[spikes]\n[[spikes.magnets]]\nmagnet = 0\npattern = \"squares\"\n")),
                       SceneError);
 }
+
+TEST_CASE("a keyed height_gain grows the spikes under a still field, and their velocity is that growth",
+          "[spikes][look][velocity]")
+{
+    // A still uniform field and height_gain keyed 1, 2, 3 at 0, 1, 2 s (collinear: the monotone
+    // curve is the line): each vertex's displacement is gain times a fixed one (the volume
+    // offset scales with it too), so its velocity is displacement * (dgain/dt) / gain.
+    const std::string text = sceneText(kLookR, uniformField(kLookH) + "[shot]\nfps = 30\n[spikes]\n"
+                                               "[[spikes.keys]]\ntime = 0.0\nheight_gain = 1.0\n"
+                                               "[[spikes.keys]]\ntime = 1.0\nheight_gain = 2.0\n"
+                                               "[[spikes.keys]]\ntime = 2.0\nheight_gain = 3.0\n");
+    const SpikeScene sc = scene(text);
+    ferro::test::TempDir dir("spike-gain-velocity");
+    const SpikeResult res = poolFrame(sc, dir, kLookR, 1.5, Vec3::Zero()); // gain 2.5, rising 1 a second
+    REQUIRE(res.mesh.velocities.size() == res.mesh.vertices.size());
+    double worst = 0, fastest = 0;
+    for (size_t v = 0; v < res.mesh.vertices.size(); ++v) {
+        const Vec3d expected = (res.mesh.vertices[v] - res.refined.vertices[v]).cast<double>() * 1.0 / 2.5;
+        fastest = std::max(fastest, expected.norm());
+        worst = std::max(worst, (res.mesh.velocities[v].cast<double>() - expected).norm());
+    }
+    INFO("fastest expected " << fastest * 1e3 << " mm/s, worst error " << worst * 1e3 << " mm/s");
+    REQUIRE(fastest > 1e-3);
+    REQUIRE(worst < 0.02 * fastest);
+    // After the last key the look holds: the spikes stand still.
+    const SpikeResult held = poolFrame(sc, dir, kLookR, 2.5, Vec3::Zero());
+    double still = 0;
+    for (const Vec3& v : held.mesh.velocities) still = std::max(still, double(v.norm()));
+    REQUIRE(still < 1e-9);
+}

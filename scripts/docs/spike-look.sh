@@ -1,0 +1,53 @@
+#!/usr/bin/env bash
+# spike-look.sh: the pictures of docs/look-guide.md, "Directing the spikes": one frame of
+# examples/magnet_slide.toml (10,240 particles, the look guide's frame) with each of the
+# art director's [spikes] keys at two values.
+#
+#   scripts/docs/spike-look.sh [WORK_DIR]     # default /tmp/ferro-spike-look; ~6 min on 2 cores
+#
+# The frame is simulated once (WORK_DIR/base); each variant is a copy of that shot run again
+# with its --set, so only the spikes, the export and the render are made again (shot.sh's
+# stamps). The PNGs go to docs/media/look/spikes_NAME.png.
+# Exit codes: 2 bad arguments, 3 a stage failed.
+set -euo pipefail
+root="$(cd "$(dirname "$0")/../.." && pwd)"
+[[ $# -le 1 ]] || { echo "usage: scripts/docs/spike-look.sh [WORK_DIR]" >&2; exit 2; }
+work="${1:-/tmp/ferro-spike-look}"
+media="$root/docs/media/look"
+mkdir -p "$work" "$media"
+
+# A close view of the heap (2 cm left of the centre, over the magnet) instead of the dish.
+common=(--set fluid.block.0.count=10240 --set render.width=480 --set render.height=360
+        --set render.antialias=true --set 'render.camera_position=[-0.02,-0.07,0.055]'
+        --set 'render.camera_target=[-0.02,0.0,0.01]' --max-frames 1 -j 1 --no-video)
+run() { "$root/scripts/shot.sh" "$root/examples/magnet_slide.toml" "$1" "${common[@]}" "${@:2}" 2> "$1.log" ||
+          { tail -3 "$1.log" >&2; exit 3; }; }
+
+echo "spike-look.sh: the base frame (pre-roll and frame 1)" >&2
+run "$work/base"
+cp "$work/base/png/frame_0001.png" "$media/spikes_default.png"
+
+# name, then the --set values of the variant.
+variants=(
+  "gain_0.5 spikes.height_gain=0.5"
+  "gain_2 spikes.height_gain=2.0"
+  "sharpness_2 spikes.sharpness=2.0"
+  "sharpness_4 spikes.sharpness=4.0"
+  "jitter_0.15 spikes.jitter=0.15"
+  "jitter_0.3 spikes.jitter=0.3"
+  "defects_0.15 spikes.defects=0.15"
+  "defects_0.35 spikes.defects=0.35"
+  "square spikes.pattern=square"
+  "square_sharp spikes.pattern=square spikes.sharpness=3.0"
+)
+for v in "${variants[@]}"; do
+  read -r name rest <<< "$v"
+  sets=()
+  for kv in $rest; do sets+=(--set "$kv"); done
+  rm -rf "$work/$name"
+  cp -a "$work/base" "$work/$name"
+  echo "spike-look.sh: $name ($rest)" >&2
+  run "$work/$name" "${sets[@]}"
+  cp "$work/$name/png/frame_0001.png" "$media/spikes_$name.png"
+done
+echo "spike-look.sh: wrote $media/spikes_*.png" >&2
