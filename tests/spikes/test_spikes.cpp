@@ -757,7 +757,7 @@ TEST_CASE("spikes.pattern = square: tips on a square lattice at l, four neighbou
             Approx(criticalWavelength(1200 - 1.2, 9.81, 0.025)).epsilon(1e-9));
 }
 
-TEST_CASE("[[spikes.magnets]] gives one magnet its own planform; the other keeps the hexagon", "[spikes][look]")
+TEST_CASE("[[spikes.magnets]] gives one magnet its own planform and the other keeps the hexagon", "[spikes][look]")
 {
     const double R = 0.045;
     const std::string magnets = dipolePair(-0.02, -0.02, 0.025, -0.025, 1.5);
