@@ -40,7 +40,8 @@ TipSums sumNearbyTips(const Pattern& pat, const Vec3d& x)
         const double wt = q * q * tip.ownership;
         const Eigen::Vector2d ab = tip.toLattice * (x - tip.position);
         // A tip left out (defects) lends the blend a flat surface instead of its profile, so
-        // the gap is a smooth patch rather than a peakless ring of troughs.
+        // the gap is a smooth patch rather than a peakless ring of troughs; at the tip itself
+        // the height is its presence times its full height.
         sums.s += wt * tip.presence * (square ? squareProfile(ab.x(), ab.y()) : hexProfile(ab.x(), ab.y()));
         sums.w += wt;
         if (d2 < Rn * Rn) {

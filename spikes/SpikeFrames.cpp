@@ -260,12 +260,13 @@ bool earlierSpikeInput(const SpikeScene& scene, const SpikeInput& in, double int
                 moved = moved || a.position != b.position || a.direction != b.direction || a.strength != b.strength;
             }
     }
-    // A look keyed by [[spikes.keys]] that changed over the interval moves the spikes too
-    // (a gain ramped up grows them, so they carry that growth as velocity).
+    // A gain or a jitter keyed by [[spikes.keys]] that changed over the interval moves the spikes
+    // too: the tips' amplitude grows, their positions drift, and the spikes carry that as
+    // velocity (tipMotions). Keyed sharpness and defects change the profile, which the velocity
+    // model does not follow: they change the shape without motion blur.
     const SpikeParams lookNow = spikeParamsAt(scene.params, in.time),
                       lookThen = spikeParamsAt(scene.params, in.time - interval);
-    moved = moved || lookNow.heightGain != lookThen.heightGain || lookNow.sharpness != lookThen.sharpness ||
-            lookNow.jitter != lookThen.jitter || lookNow.defects != lookThen.defects;
+    moved = moved || lookNow.heightGain != lookThen.heightGain || lookNow.jitter != lookThen.jitter;
     if (!moved) return false;
     earlier = in;
     earlier.time = in.time - interval;

@@ -162,9 +162,10 @@ void jitterTips(const TraceFrame& f, LatticeTips& lattice, const SpikeParams& P,
     }
 }
 
-// Defects: a tip whose fate falls under the defect fraction d is left out; fates within 0.05
-// above d sink gradually, so a d raised over keys takes the tips away one by one instead of
-// popping them. d = 0 keeps every tip whole.
+// Defects: a tip whose fate (uniform on [0, 1)) lies under d - 0.05 is left out, one between
+// d - 0.05 and d is lowered (half height at d - 0.025), so a d raised over keys takes the tips
+// away one by one instead of popping them: about d - 0.025 of the tips are gone. d = 0 keeps
+// every tip whole.
 double tipPresence(const SpikeParams& P, int magnet, int i, int j)
 {
     if (!(P.defects > 0)) return 1.0;
@@ -232,12 +233,17 @@ int traceSquare(const TraceFrame& f, int maxRings, LatticeTips& lattice)
     traceLine(f, f.x0, n0, live0, -f.e1, 0, 0, -1, 0, maxRings, lattice, &axis[1]);
     int most = int(std::max(axis[0].size(), axis[1].size())) - 1;
     for (int side = 0; side < 2; ++side)
-        for (size_t r = 0; r < axis[side].size(); ++r) {
+        for (size_t r = side == 0 ? 0 : 1; r < axis[side].size(); ++r) { // the origin's rows once
             const int i = side == 0 ? int(r) : -int(r);
             const Vec3d s = axis[side][r], n = f.normals.at(s, f.n0);
+            // Rows start from the origin (which may be subcritical: the top of a heap) and from
+            // the axis's supercritical tips, not from the two dead tips that end the axis (a row
+            // from there would never meet a live tip, so nothing would end it before the wall).
+            const bool live = alive(f, s, n);
+            if (r > 0 && !live) continue;
             for (const int dj : {1, -1}) {
                 std::vector<Vec3d> row;
-                traceLine(f, s, n, alive(f, s, n), double(dj) * f.e1perp, i, 0, 0, dj, maxRings, lattice, &row);
+                traceLine(f, s, n, live, double(dj) * f.e1perp, i, 0, 0, dj, maxRings, lattice, &row);
                 most = std::max(most, int(row.size()));
             }
         }
@@ -353,12 +359,12 @@ void traceLattice(Pattern& pat, const FreeSurface& surface, const SurfaceFields&
     for (Tip& tip : lattice.tips) tip.toLattice = tipLatticeMap(frame, lattice, tip);
     pat.tips = std::move(lattice.tips);
     // Eq. 14 at each tip: C0 = beta |H|, capped so the tip stands at most maxAspect l above
-    // the mean level, faded in from M_c, times the art director's gain and the tip's presence
-    // (defects); the spike grows along the tip's field.
+    // the mean level, faded in from M_c, times the art director's gain; the spike grows along
+    // the tip's field. Its presence (defects) scales its profile in the displacement instead.
     for (Tip& tip : pat.tips) {
         const Vec3d H = fields.field(tip.position, tip.normal);
         tip.presence = tipPresence(P, pat.info.magnet, tip.i, tip.j);
-        tip.amplitude = spikeAmplitude(P, H.norm(), l) * fields.heightFade(tip.position, H) * tip.presence;
+        tip.amplitude = spikeAmplitude(P, H.norm(), l) * fields.heightFade(tip.position, H);
         tip.direction = growthDirection(H, tip.normal, P.maxTilt);
     }
     std::vector<Vec3d> positions;

@@ -45,7 +45,7 @@ struct Tip {
     double ownership = 1;                  // 0..1: how much of a spike it keeps where patterns meet
                                            // (settleSeams; 1 with a single pattern)
     double presence = 1;                   // 0..1: 0 = left out by SpikeParams::defects (its profile,
-                                           // troughs included, flattens; amplitude is scaled by it)
+                                           // troughs included, is scaled by it in the displacement)
 };
 
 /// One magnet's pattern: its public description (origin x0, normal, first axis e1, spacing l),

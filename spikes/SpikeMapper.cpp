@@ -284,7 +284,8 @@ std::vector<Pattern> tracePatterns(const SpikeInput& in, const SpikeParams& P, c
         placePatterns(PlacementContext{in, P, fields, freeSurface, region.active, diagonal}, g, Mc);
     if (patterns.empty()) return {};
 
-    // 3. Tips (Fig. 7): trace the axes along the surface (six, or four on a square), fill the rings between them.
+    // 3. Tips (Fig. 7): a hexagon traces six axes along the surface and fills the rings between
+    // them; a square traces the i axis both ways and rows along e2 from its tips.
     for (Pattern& pat : patterns) traceLattice(pat, freeSurface, fields, P, Mc, diagonal);
     settleSeams(patterns, in.magnets);
     return patterns;

@@ -82,7 +82,7 @@ struct SpikePattern {
     double spacing = 0;     ///< tip spacing l [m]
     double field = 0;       ///< |H(x0)| [A/m]
     double magnetization = 0; ///< |M(x0)| [A/m]
-    int rings = 0;          ///< rings traced around x0
+    int rings = 0;          ///< rings traced around x0 (a square: the most tips one traced line reached)
     SpikeParams::Lattice lattice = SpikeParams::Lattice::Hexagon; ///< the planform (SpikeParams::latticeOf)
 };
 

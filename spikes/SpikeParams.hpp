@@ -24,13 +24,14 @@ struct SpikeParams {
     /// The planform of a magnet's spikes (eq. 12 with three or two wave vectors).
     enum class Lattice {
         Hexagon, ///< eq. 13: three wave vectors 120 degrees apart, tips on a triangular lattice (the paper)
-        Square   ///< two wave vectors 90 degrees apart, tips on a square lattice (squarePattern)
+        Square   ///< two wave vectors 90 degrees apart, tips on a square lattice (squareProfile)
     };
     /// How the tip spacing l (distance between neighbouring tips) is chosen.
     enum class Spacing {
         Paper,    ///< eq. 15: l = alpha / |H(x0)|, so tips crowd as the field grows
         Physical  ///< the critical wavelength lambda_c = 2 pi sqrt(sigma / (delta_rho g)) of
-                  ///< linear theory: eq. 13 with k = 2 pi / lambda_c, tips 2/sqrt(3) lambda_c apart
+                  ///< linear theory: k = 2 pi / lambda_c, tips 2/sqrt(3) lambda_c apart on a
+                  ///< hexagon (eq. 13), lambda_c on a square
     };
     bool enabled = true;             ///< false: copy the surface unchanged
     Spacing spacing = Spacing::Paper;
@@ -59,9 +60,10 @@ struct SpikeParams {
                                      ///< of the tip spacing l, in [0, 0.35]; each tip's offset is a
                                      ///< fixed function of seed, magnet and lattice coordinates, so a
                                      ///< tip keeps its offset from frame to frame as the pattern moves
-    double defects = 0.0;            ///< fraction of tips left out (missing spikes), in [0, 0.9];
-                                     ///< which tips is again fixed by seed and lattice coordinates, and
-                                     ///< raising it over keys sinks tips one by one (each over a 0.05 band)
+    double defects = 0.0;            ///< missing spikes, in [0, 0.9]: about defects - 0.025 of the tips
+                                     ///< are left out (each sinks over a band of 0.05 below its
+                                     ///< threshold, so raising it over keys sinks tips one by one);
+                                     ///< which tips is fixed by seed and lattice coordinates
     uint32_t seed = 0;               ///< the irregularity's random seed (jitter and defects)
     std::vector<SpikeKey> keys;      ///< [[spikes.keys]] in time order; empty = the values above
     double magnetizationFade = 0.25; ///< height ramps from 0 at |M| = M_c to full at (1 + fade) M_c

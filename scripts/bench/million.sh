@@ -22,8 +22,9 @@ command -v povray >/dev/null || bench_die 4 "povray is missing (scripts/install-
 
 scene="$root/examples/million_dish.toml"
 # The simulation is timed here with Jacobi from the cold fill, frames 0..2, as it was before
-# the example took CG: CG's first frames from the cold fill end at the cap, so its cost is
-# measured over the frames where it converges, by the million's Slurm run (scripts/bench/slurm.sh).
+# the example took CG: CG's first frame from the cold fill still ends at the cap in part of its
+# steps, so its cost is measured over the frames where it converges, by the million's Slurm run
+# (scripts/bench/slurm.sh).
 jacobi=(--set sim.pressure_iteration=jacobi)
 key="$(cat "$root"/sim/*/*.cpp "$root"/sim/*/*.hpp "$scene" | sha1sum | cut -c1-12)"
 dir="$cache/million"

@@ -44,11 +44,18 @@ trap '"$root/scripts/slurm/local-cluster.sh" stop "$cluster" || true; rm -rf "$c
 eval "$("$root/scripts/slurm/local-cluster.sh" start "$cluster")"
 export FERRO_BIN="$bin"
 
-# wait_queue: until the queue is empty (the jobs' own time limits end it).
-wait_queue() { while [[ -n "$(squeue -h -o %i)" ]]; do sleep 2; done; }
+# wait_queue: until the queue is empty, at most 4 hours (a held array whose simulation job
+# Slurm killed would otherwise wait for ever: held jobs' time limits do not run).
+wait_queue() {
+  local t0=$SECONDS
+  while [[ -n "$(squeue -h -o %i)" ]]; do
+    (( SECONDS - t0 < 14400 )) || { scancel --user="$(id -un)" 2>/dev/null || true; bench_die 3 "the queue did not empty in 4 hours"; }
+    sleep 2
+  done
+}
 
 shot="${BENCH_SLURM_SHOT:-$work/shot}"
-submit() { "$root/scripts/shot.sh" "$scene" "$shot" --max-frames "$last" "${sets[@]}" "$@"; }
+submit() { "$root/scripts/shot.sh" "$scene" "$shot" --max-frames "$last" ${sets[@]+"${sets[@]}"} "$@"; }
 e2e=""
 if [[ $case_name == fig9 ]]; then
   bench_note "simulating frames 0..$last locally"
@@ -61,12 +68,15 @@ elif [[ -f "$shot/bench-e2e-seconds" && -f "$shot/particles/particles_$(printf %
 else
   bench_note "submitting the whole shot (frames 0..$last) to the cluster"
   start="$(date +%s.%N)"
-  submit --slurm --dry-run 2> "$out/slurm-$case_name-sbatch.txt" > /dev/null || true
   res="$(submit --slurm 2> "$work/submit.log")" || { cat "$work/submit.log" >&2; bench_die 3 "submission failed"; }
   wait_queue
   e2e="$(awk -v a="$start" -v b="$(date +%s.%N)" 'BEGIN { printf "%.0f", b - a }')"
   [[ -f "$shot/png/frame_$(printf %04d "$last").png" ]] || bench_die 3 "the shot did not finish (see $shot/logs)"
   echo "$e2e" > "$shot/bench-e2e-seconds"
+  # The sbatch lines of that submission, and what a second one of the finished shot would send.
+  { cat "$work/submit.log"
+    echo "# a second submission of the finished shot (--dry-run): no simulation job and no frame task; the video job is always sent, its make finds shot.mp4 up to date"
+    submit --slurm --dry-run 2>&1 > /dev/null; } > "$out/slurm-$case_name-sbatch.txt"
   bench_note "the whole shot: $e2e s"
 fi
 
@@ -78,13 +88,14 @@ fi
 # converges is timed over its frames after the first, all at the cap).
 if [[ $case_name == million ]]; then
   bench_note "the same scene at 40,960 particles, frames 0..$last, 2 threads, Jacobi and CG"
+  commit="$(git -C "$root" rev-parse --short HEAD 2>/dev/null || echo unknown)"
   for it in jacobi cg; do
     "$bin/ferro-sim" "$scene" --out "$work/small-$it" --max-frames "$last" --threads 2 --quiet \
       --set fluid.block.0.count=40960 --set sim.pressure_iteration="$it" 2> "$work/small-$it.log" ||
       { tail -3 "$work/small-$it.log" >&2; bench_die 3 "ferro-sim (40,960, $it) failed"; }
   done
-  python3 - "$out/slurm-million-sim.csv" "$last" "1000000:cg:$shot/particles:Slurm job (2 cores)" \
-      "40960:jacobi:$work/small-jacobi:ferro-sim --threads 2" "40960:cg:$work/small-cg:ferro-sim --threads 2" <<'PY'
+  python3 - "$out/slurm-million-sim.csv" "$last" "1000000:cg:$shot/particles:Slurm job (2 cores) at $commit" \
+      "40960:jacobi:$work/small-jacobi:ferro-sim --threads 2 at $commit" "40960:cg:$work/small-cg:ferro-sim --threads 2 at $commit" <<'PY'
 import os, sys
 out, last = sys.argv[1], int(sys.argv[2])
 def header(path):
@@ -179,21 +190,21 @@ The simulation job against the same scene at 40,960 particles (2 threads here), 
 frames whose density solve converged (each frame's time: when it was published after the one
 before; CG from the cold fill ends at its iteration cap in the frames listed as capped):
 
-| particles | density iteration | frames timed | steps a frame | s a frame | µs a particle and step | s a particle and simulated s | capped frames |
-| --- | --- | --- | --- | --- | --- | --- | --- |
+| particles | density iteration | frames timed | steps a frame | s a frame | µs a particle and step | s a particle and simulated s | capped frames | run |
+| --- | --- | --- | --- | --- | --- | --- | --- | --- |
 MD
-      tail -n +2 "$out/slurm-million-sim.csv" | awk -F, '{ printf "| %s | %s | %s | %s | %s | %s | %s | %s |\n", $1, $2, $3, $4, $5, $6, $7, $8 }'
+      tail -n +2 "$out/slurm-million-sim.csv" | awk -F, '{ printf "| %s | %s | %s | %s | %s | %s | %s | %s | %s |\n", $1, $2, $3, $4, $5, $6, $7, $8, $9 }'
       awk -F, 'NR == 2 { m = $7; ms = $4; mu = $6 } NR > 2 && (best == "" || $7 < best) { best = $7; bs = $4; bu = $6; bi = $2 }
         END { printf "\nThe million with CG against the 40,960 with its cheaper iteration (%s): **%.2fx** a particle and\n", bi, m / best
               printf "simulated second (Jacobi at a million, million.md: 3.61x), of which %.2fx a particle and step and\n", mu / bu
               printf "%.2fx the steps a simulated second.\n", ms / bs }' "$out/slurm-million-sim.csv"
     fi
     if [[ -f "$out/slurm-million-sim.csv" ]]; then
-      awk -F, 'FILENAME ~ /sim/ && FNR == 2 { S = $5 } FILENAME !~ /sim/ && $1 == "1 x 1" { F = $5 / $4 }
+      awk -F, 'NR == FNR && FNR == 2 { S = $5 } NR != FNR && $1 == "1 x 1" { F = $5 / $4 }
         END { printf "\nFor this shot: a frame task takes F = %.0f s on one core (the 1 x 1 array over its frames), the\n", F
               printf "simulation S = %.0f s a frame once converged: one core of frame tasks keeps up with the\n", S
               printf "simulation (W = %.2f would do), so on any cluster the million shot is bound by its one\n", F / S
-              printf "sequential simulation job, about %.1f h for its 61 frames (plus ~16 min from the cold fill).\n", 61 * S / 3600
+              printf "sequential simulation job, about %.1f h for its 61 frames (plus the first frames from the cold fill).\n", 61 * S / 3600
               printf "These frames have the magnet far (no spikes); with spikes over the dish a frame costs about\n"
               printf "37 CPU s (million.md, the near frame), still under S. Only a re-render (a new look, the\n"
               printf "simulation kept) is bound by the frame stages: 61 F / W, until the file server is: a frame\n"

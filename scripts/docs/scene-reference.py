@@ -127,7 +127,10 @@ def annotated_entries():
                 names = [name] + re.findall(r",\s*([A-Za-z_]+)\s*=", value)
                 for n in names:
                     key = f"{section}.{n}" if section else n
-                    entries[key] = [words]
+                    # A key written again without words (the second of two [[...keys]]
+                    # tables) keeps the words of its first, documented occurrence.
+                    if words or key not in entries:
+                        entries[key] = [words]
                 current = f"{section}.{names[-1]}" if section else names[-1]
                 if len(names) > 1:
                     for n in names[:-1]:

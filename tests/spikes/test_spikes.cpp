@@ -595,7 +595,8 @@ TEST_CASE("spikes.jitter moves each tip within jitter l, uniformly over the disc
     const double N = matched;
     REQUIRE(std::abs(sumR2 / N - 0.5) < 4 * std::sqrt(1.0 / 12 / N));
     REQUIRE((sum / N).norm() < 4 * R / std::sqrt(2 * N));
-    // The next frame, the pool 1 mm higher: every tip keeps its offset; another seed does not.
+    // Another surface (the pool 1 mm higher, as a later frame's): every tip keeps its offset;
+    // another seed does not.
     const SpikeResult next = lookFrame("jitter = 0.25\nseed = 7\n", 1.0, 0.001);
     const SpikeResult nextRegular = lookFrame("", 1.0, 0.001);
     const auto n = tipsByIndex(next), nr = tipsByIndex(nextRegular);
@@ -690,7 +691,7 @@ TEST_CASE("[[spikes.keys]] animate the look: the keys' values at their times, mo
     REQUIRE_THROWS_AS(scene(sceneText(kLookR, "[spikes]\n[[spikes.keys]]\ntime = 0.0\nspacing = 2.0\n")), SceneError);
 }
 
-TEST_CASE("the square planform: tips 3, cell centres -1.5, mean zero, four-fold", "[spikes][physics]")
+TEST_CASE("the square planform: tips 3, cell centres -1.5, saddles -0.25, mean zero", "[spikes][physics]")
 {
     // g = (cos 2 pi a + cos 2 pi b) / 2 is the square planform of eq. 12 (two wave vectors at
     // 90 degrees); F = 2.25 g + g^2 - 0.25 keeps eq. 13's range and mean.
@@ -704,7 +705,6 @@ TEST_CASE("the square planform: tips 3, cell centres -1.5, mean zero, four-fold"
         for (int j = 0; j < n; ++j) {
             const double a = (i + 0.5) / n, b = (j + 0.5) / n;
             mean += squareProfile(a, b);
-            REQUIRE(squareProfile(a, b) == Approx(squareProfile(-b, a)).margin(1e-12)); // 90 degrees
             REQUIRE(squareProfile(a, b) <= 3.0);
             REQUIRE(squareProfile(a, b) >= -1.5);
         }
