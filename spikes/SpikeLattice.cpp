@@ -232,21 +232,26 @@ int traceSquare(const TraceFrame& f, int maxRings, LatticeTips& lattice)
     traceLine(f, f.x0, n0, live0, f.e1, 0, 0, 1, 0, maxRings, lattice, &axis[0]);
     traceLine(f, f.x0, n0, live0, -f.e1, 0, 0, -1, 0, maxRings, lattice, &axis[1]);
     int most = int(std::max(axis[0].size(), axis[1].size())) - 1;
-    for (int side = 0; side < 2; ++side)
-        for (size_t r = side == 0 ? 0 : 1; r < axis[side].size(); ++r) { // the origin's rows once
+    for (int side = 0; side < 2; ++side) {
+        // Rows start from every axis tip up to the axis's last supercritical one (tips before it
+        // may be subcritical: the top of a heap), not from the dead tips that end the axis: a
+        // row from there would never meet a live tip, so nothing would end it before the wall.
+        std::vector<char> live(axis[side].size());
+        size_t lastLive = 0;
+        for (size_t r = 0; r < axis[side].size(); ++r) {
+            live[r] = alive(f, axis[side][r], f.normals.at(axis[side][r], f.n0));
+            if (live[r]) lastLive = r;
+        }
+        for (size_t r = side == 0 ? 0 : 1; r <= lastLive; ++r) { // the origin's rows once
             const int i = side == 0 ? int(r) : -int(r);
             const Vec3d s = axis[side][r], n = f.normals.at(s, f.n0);
-            // Rows start from the origin (which may be subcritical: the top of a heap) and from
-            // the axis's supercritical tips, not from the two dead tips that end the axis (a row
-            // from there would never meet a live tip, so nothing would end it before the wall).
-            const bool live = alive(f, s, n);
-            if (r > 0 && !live) continue;
             for (const int dj : {1, -1}) {
                 std::vector<Vec3d> row;
-                traceLine(f, s, n, live, double(dj) * f.e1perp, i, 0, 0, dj, maxRings, lattice, &row);
+                traceLine(f, s, n, live[r] != 0, double(dj) * f.e1perp, i, 0, 0, dj, maxRings, lattice, &row);
                 most = std::max(most, int(row.size()));
             }
         }
+    }
     return most;
 }
 
