@@ -182,8 +182,9 @@ int DfsphSolver::conjugateGradient(std::vector<Real>& kappa, const std::vector<R
         if (!inS[i]) kappa[i] = 0;
     });
     // The compression the step would leave on S: hPow R_i where positive, summed over CG's own
-    // unknowns and divided by every particle (the Jacobi sweeps' mean, restricted to S). A particle outside S (sparse, not compressed by the step
-    // itself) may still be compressed by its neighbours' pressure, which no kappa in S undoes:
+    // unknowns and divided by every particle (the Jacobi sweeps' mean, restricted to S). A
+    // particle outside S (sparse, not compressed by the step itself) may still be compressed by
+    // its neighbours' pressure, which no kappa in S undoes:
     // counting those kept CG at its cap on shallow layers (40,960 particles 8 deep, every step
     // of 5 frames, 0.33 % falling to 0.11 % left). The caller's Jacobi sweeps, over every
     // particle, finish them.
