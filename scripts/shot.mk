@@ -133,7 +133,7 @@ surface/surface_%.ply: particles/particles_%.ply .scene/surface.toml
 
 spiky/spiky_%.ply: surface/surface_%.ply particles/particles_%.ply .scene/spikes.toml
 	@mkdir -p spiky
-	$(FERRO_BIN)/ferro-spikes $< --particles particles/particles_$*.ply --scene '$(SCENE)' --out $@ --quiet $(threads_arg) $(SETS)
+	$(FERRO_BIN)/ferro-spikes $< --particles particles/particles_$*.ply --particle-history 'particles/particles_{:04}.ply' --scene '$(SCENE)' --out $@ --quiet $(threads_arg) $(SETS)
 
 ifeq ($(SPIKES),1)
 EXPORTED_MESH := spiky/spiky_%.ply

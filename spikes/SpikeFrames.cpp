@@ -1,4 +1,5 @@
 #include "spikes/SpikeFrames.hpp"
+#include "spikes/SurfaceFlow.hpp"
 
 #include "sim/core/FrameRunner.hpp"
 
@@ -121,7 +122,10 @@ void addMagnetHistory(const SpikeScene& scene, double time, SpikeInput& in)
 {
     constexpr int kHistorySteps = 16;
     const double tau = scene.params.growthTime;
-    if (!(tau > 0) || scene.magnets.empty() || scene.magnets.size() != in.magnets.size()) return;
+    if (scene.magnets.empty() || scene.magnets.size() != in.magnets.size()) return;
+    in.tracks = std::make_shared<const std::vector<MagnetTrack>>(scene.magnets);
+    in.lookbackStep = tau > 0 ? tau / 4 : 1.0 / scene.fps;
+    if (!(tau > 0)) return;
     const double step = tau / 4;
     double total = 0;
     for (int k = 0; k <= kHistorySteps; ++k) {
@@ -267,6 +271,8 @@ bool earlierSpikeInput(const SpikeScene& scene, const SpikeInput& in, double int
     const SpikeParams lookNow = spikeParamsAt(scene.params, in.time),
                       lookThen = spikeParamsAt(scene.params, in.time - interval);
     moved = moved || lookNow.heightGain != lookThen.heightGain || lookNow.jitter != lookThen.jitter;
+    // Tips carried by the flow (response_time) move with it even under a still field.
+    moved = moved || (scene.params.responseTime > 0 && in.flow && in.flow->samples().size() > 1);
     if (!moved) return false;
     earlier = in;
     earlier.time = in.time - interval;
@@ -288,10 +294,19 @@ bool earlierSpikeInput(const SpikeScene& scene, const SpikeInput& in, double int
 }
 
 SpikeResult spikeFrame(const SpikeScene& scene, const std::string& surfacePath, const std::string& particlePath,
-                       const std::string& outPath, int frameHint)
+                       const std::string& outPath, int frameHint, const std::string& historyPattern)
 {
     refuseToOverwriteInputs("--out", outPath, {surfacePath, particlePath});
-    const SpikeInput in = loadSpikeInput(scene, surfacePath, particlePath, frameHint);
+    SpikeInput in = loadSpikeInput(scene, surfacePath, particlePath, frameHint);
+    if (scene.params.responseTime > 0 && !historyPattern.empty()) {
+        // The frame's number: the range's, else the frame's time (header) at the shot's rate.
+        const int frame = frameHint >= 0 ? frameHint : int(std::lround(in.time * scene.fps));
+        try {
+            in.flow = SurfaceFlowHistory::load(historyPattern, frame, scene.params.responseTime, scene.fps);
+        } catch (const ParticleFileError& e) {
+            throw SpikeInputError(e.what());
+        }
+    }
     // A mesh with velocities gets the spikes' own motion too: how their tips moved since a
     // frame interval earlier (the motion a frame's renders blur over).
     const double interval = 1.0 / scene.fps;
@@ -330,7 +345,7 @@ void spikeFrames(const SpikeScene& scene, const std::string& surfacePattern, con
         const auto start = std::chrono::steady_clock::now();
         const SpikeResult res = spikeFrame(scene, framePath(surfacePattern, frame),
                                            particlePattern.empty() ? std::string() : framePath(particlePattern, frame),
-                                           framePath(outPattern, frame), frame);
+                                           framePath(outPattern, frame), frame, particlePattern);
         const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
         if (!quiet) {
             std::ostringstream line;

@@ -46,13 +46,17 @@ SpikeInput loadSpikeInput(const SpikeScene& scene, const std::string& surfacePat
 bool earlierSpikeInput(const SpikeScene& scene, const SpikeInput& in, double interval, SpikeInput& earlier);
 
 /// One frame: load, addSpikes (with the spikes' own motion when the surface has velocities), write `outPath` atomically (PLY with normals and the input's
-/// comments plus spike_tips, spike_spacing, critical_magnetization). Throws SpikeIoError or
+/// comments plus spike_tips, spike_spacing, critical_magnetization). With [spikes]
+/// response_time > 0 and a `historyPattern` (the particle files' pattern, {:04} / %04d), the
+/// tips are carried by the flow of the earlier frames' files (SurfaceFlow.hpp); the frame's
+/// number is frameHint, else its time times the shot's fps. Throws SpikeIoError or
 /// SpikeInputError as loadSpikeInput, MeshFileError when the output cannot be written, and
 /// std::runtime_error (never writing) if the result had a non-finite vertex.
 SpikeResult spikeFrame(const SpikeScene& scene, const std::string& surfacePath, const std::string& particlePath,
-                       const std::string& outPath, int frameHint = -1);
+                       const std::string& outPath, int frameHint = -1, const std::string& historyPattern = {});
 
-/// A frame range: patterns with a {:04} / %04d placeholder, frames first..last inclusive,
+/// A frame range: patterns with a {:04} / %04d placeholder, frames first..last inclusive
+/// (the particle pattern is also the flow's history for response_time),
 /// several in flight (TBB; the caller limits threads). Progress lines on stderr unless quiet.
 /// The policy of every stage's frame range (sim/core/FrameRunner.hpp): stops at the first
 /// failing frame and rethrows its error (frames already written are kept).

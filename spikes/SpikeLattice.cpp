@@ -1,5 +1,6 @@
 // Tracing the hexagonal lattice of SpikeLattice.hpp.
 #include "spikes/SpikeLattice.hpp"
+#include "spikes/SurfaceFlow.hpp"
 #include "spikes/SpikeDisplacement.hpp"
 
 #include "sim/core/Constants.hpp"
@@ -162,6 +163,26 @@ void jitterTips(const TraceFrame& f, LatticeTips& lattice, const SpikeParams& P,
     }
 }
 
+// SpikeParams::responseTime: each tip moved by the offset the fluid's flow carried it from its
+// lattice site (SurfaceFlowHistory::carriedOffset, at most one spacing: a tip never strays
+// into the next one's place), then dropped onto the surface as the traced tips are. The
+// lattice maps are built afterwards from the moved tips, so the profile follows them.
+void carryTips(const TraceFrame& f, LatticeTips& lattice, const SpikeParams& P, int magnet)
+{
+    const SpikeInput& in = f.fields.input();
+    if (!(P.responseTime > 0) || !in.flow) return;
+    for (Tip& tip : lattice.tips) {
+        Vec3d d = in.flow->carriedOffset(tip.position, tip.normal, magnet, P.responseTime, in.time);
+        if (d.norm() > f.l) d *= f.l / d.norm();
+        if (!(d.norm() > 1e-9 * f.l)) continue;
+        Vec3d s, n;
+        if (dropOnSurface(f, tip.position + d, s, n)) {
+            tip.position = s;
+            tip.normal = n;
+        }
+    }
+}
+
 // Defects: a tip whose fate (uniform on [0, 1)) lies under d - 0.05 is left out, one between
 // d - 0.05 and d is lowered (half height at d - 0.025), so a d raised over keys takes the tips
 // away one by one instead of popping them: about d - 0.025 of the tips are gone. d = 0 keeps
@@ -172,10 +193,11 @@ double tipPresence(const SpikeParams& P, int magnet, int i, int j)
     return smoothstep01((tipNoise(P.seed, magnet, i, j).fate - P.defects) / 0.05 + 1.0);
 }
 
-// Supercritical at surface point s with normal n: |M| > M_c.
+// Supercritical at surface point s with normal n: |M| > M_c (with the bifurcation curve's
+// hysteresis: spikes stood there, SurfaceFields::spiky).
 bool alive(const TraceFrame& f, const Vec3d& s, const Vec3d& n)
 {
-    return f.fields.magnetization(s, f.fields.field(s, n)) > f.Mc;
+    return f.fields.spiky(s, f.fields.field(s, n));
 }
 
 // One line of tips from the tip at s (unit normal n, supercritical if startAlive, lattice
@@ -361,6 +383,7 @@ void traceLattice(Pattern& pat, const FreeSurface& surface, const SurfaceFields&
         pat.info.rings = fillRings(frame, axisTips, lattice);
     }
     jitterTips(frame, lattice, P, pat.info.magnet);
+    carryTips(frame, lattice, P, pat.info.magnet);
     for (Tip& tip : lattice.tips) tip.toLattice = tipLatticeMap(frame, lattice, tip);
     pat.tips = std::move(lattice.tips);
     // Eq. 14 at each tip: C0 = beta |H|, capped so the tip stands at most maxAspect l above

@@ -35,24 +35,22 @@ SpikeResult unchangedResult(SpikeResult res, const TriangleMesh& surface)
 // Phase 1 output, per vertex of the input surface.
 struct InputRegion {
     std::vector<char> wetted; // 1 = wetted wall (SurfaceFields::wetted)
-    std::vector<char> active; // 1 = supercritical: |M| > M_c (never on the wetted wall)
+    std::vector<char> active; // 1 = spiky (SurfaceFields::spiky; never on the wetted wall)
 };
 
-// Phase 1: the wetted wall and the supercritical part of the input surface. |M| [A/m] at each
-// free vertex from the field at it (SurfaceFields, with the input's area-weighted normals)
-// compared with Mc, the critical magnetization of eq. 16 [A/m].
-InputRegion classifyInputSurface(const TriangleMesh& input, const SurfaceFields& fields, double Mc)
+// Phase 1: the wetted wall and the supercritical part of the input surface: where spikes
+// stand, grow or sink at each free vertex (SurfaceFields::spiky, from the field there with the
+// input's area-weighted normals: |M| above M_c of eq. 16, or the bifurcation's hysteresis).
+InputRegion classifyInputSurface(const TriangleMesh& input, const SurfaceFields& fields)
 {
     const size_t nIn = input.vertices.size();
     const std::vector<Vec3d> inputNormals = areaWeightedNormals(input);
     InputRegion region{std::vector<char>(nIn, 0), std::vector<char>(nIn, 0)};
-    std::vector<double> magnetizationIn(nIn, 0.0);
     tbb::parallel_for(size_t(0), nIn, [&](size_t v) {
         const Vec3d x = toD(input.vertices[v]);
         region.wetted[v] = fields.wetted(x);
         if (region.wetted[v]) return;
-        magnetizationIn[v] = fields.magnetization(x, fields.field(x, inputNormals[v]));
-        region.active[v] = magnetizationIn[v] > Mc;
+        region.active[v] = fields.spiky(x, fields.field(x, inputNormals[v]));
     });
     return region;
 }
@@ -118,13 +116,13 @@ bool patternOrigin(const PlacementContext& c, const Magnet& magnet, const Vec3d&
 }
 
 // The tip spacing l [m], clamped to [P.minSpacing, P.maxSpacing]: eq. 15, l = alpha / |H(x0)|
-// with field H0 [A/m] at the origin, or the tip distance of the critical wavenumber
+// with |H0| [A/m] at the origin (SurfaceFields::fieldHistoryMean: over the growth time), or the tip distance of the critical wavenumber
 // k = 2 pi / lambda_c (g [m/s^2]) on the planform: 2 lambda_c / sqrt3 on a hexagon, lambda_c
 // on a square.
-double tipSpacing(const SpikeInput& in, const SpikeParams& P, double g, const Vec3d& H0, SpikeParams::Lattice lattice)
+double tipSpacing(const SpikeInput& in, const SpikeParams& P, double g, double H0, SpikeParams::Lattice lattice)
 {
     const double lambda = criticalWavelength(in.fluid.density - P.ambientDensity, g, in.fluid.surfaceTension);
-    double l = P.spacing == SpikeParams::Spacing::Paper  ? P.alpha / std::max(H0.norm(), 1e-30)
+    double l = P.spacing == SpikeParams::Spacing::Paper  ? P.alpha / std::max(H0, 1e-30)
                : lattice == SpikeParams::Lattice::Square ? lambda
                                                          : 2.0 / std::sqrt(3.0) * lambda;
     return std::clamp(l, P.minSpacing, P.maxSpacing);
@@ -176,7 +174,7 @@ std::vector<Pattern> placePatterns(const PlacementContext& c, double g, double M
         pat.info.field = H0.norm();
         pat.info.magnetization = M0;
         pat.info.lattice = c.P.latticeOf(int(m));
-        pat.info.spacing = tipSpacing(in, c.P, g, H0, pat.info.lattice);
+        pat.info.spacing = tipSpacing(in, c.P, g, c.fields.fieldHistoryMean(x0, H0), pat.info.lattice);
         pat.info.axis = latticeAxis(n0, c.P.orientation);
         bool duplicate = false;
         for (const Pattern& other : patterns)
@@ -273,7 +271,7 @@ std::vector<Pattern> tracePatterns(const SpikeInput& in, const SpikeParams& P, c
     const TriangleMesh& input = in.surface;
     const double g = in.fluid.gravity.norm();
     // 1. Wetted walls and the supercritical part of the input surface.
-    region = classifyInputSurface(input, fields, Mc);
+    region = classifyInputSurface(input, fields);
     if (std::none_of(region.active.begin(), region.active.end(), [](char a) { return a != 0; })) return {};
     const double diagonal = boundingDiagonal(input);
     const SurfaceRayCaster caster(input);

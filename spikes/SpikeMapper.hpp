@@ -38,6 +38,8 @@
 
 namespace ferro {
 
+class SurfaceFlowHistory;
+
 /// What addSpikes needs to know about the fluid and its vessel.
 struct SpikeFluid {
     double density = 1000.0;        ///< rho [kg/m^3]
@@ -71,6 +73,14 @@ struct SpikeInput {
     /// pastWeights[k] its weight. Empty = no lag.
     std::vector<std::vector<Magnet>> pastMagnets;
     std::vector<double> pastWeights;
+    /// The scene's magnet tracks when they are the frame's magnets (null otherwise): the
+    /// bifurcation curve's hysteresis looks further back than pastMagnets, in steps of
+    /// lookbackStep [s], for the last time the field left the bistable band.
+    std::shared_ptr<const std::vector<MagnetTrack>> tracks;
+    double lookbackStep = 0;
+    /// The fluid's flow over earlier frames, for SpikeParams::responseTime (SurfaceFlow.hpp):
+    /// the tips are carried by it. Null = the tips stand where the field lays them out.
+    std::shared_ptr<const SurfaceFlowHistory> flow;
 };
 
 /// One hexagonal pattern (one magnet).

@@ -49,7 +49,12 @@ SpikeParams parseSpikeParams(const SceneDocument& doc)
     p.defects = defects(r, p.defects);
     p.seed = uint32_t(r.integerInRange("seed", 0, 0, INT_MAX));
     p.magnetizationFade = r.positive("magnetization_fade", p.magnetizationFade);
+    p.heightCurve = r.choice("height_curve", {"fade", "bifurcation"}, "fade") == "bifurcation"
+                        ? SpikeParams::HeightCurve::Bifurcation
+                        : SpikeParams::HeightCurve::Fade;
+    p.lowerThreshold = r.numberInRange("lower_threshold", p.lowerThreshold, 0.5, 1.0);
     p.growthTime = r.nonNegative("growth_time", p.growthTime);
+    p.responseTime = r.numberInRange("response_time", p.responseTime, 0, 5);
     p.wallMargin = r.nonNegative("wall_margin", p.wallMargin);
     p.wallFade = r.nonNegative("wall_fade", p.wallFade);
     p.resolution = r.numberInRange("resolution", p.resolution, 3, 100);

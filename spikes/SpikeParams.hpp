@@ -66,6 +66,17 @@ struct SpikeParams {
                                      ///< which tips is fixed by seed and lattice coordinates
     uint32_t seed = 0;               ///< the irregularity's random seed (jitter and defects)
     std::vector<SpikeKey> keys;      ///< [[spikes.keys]] in time order; empty = the values above
+    /// How a spike's height follows the supercriticality eps = |M| / M_c - 1.
+    enum class HeightCurve {
+        Fade,        ///< smooth ramp from 0 at M_c to full at (1 + magnetizationFade) M_c, no
+                     ///< hysteresis (the look since the paper's port)
+        Bifurcation  ///< the hexagons' subcritical amplitude equation (SpikeBifurcation): a jump
+                     ///< at M_c, full at (1 + magnetizationFade) M_c, and spikes that stand
+                     ///< persist down to lowerThreshold M_c as the field falls
+    };
+    HeightCurve heightCurve = HeightCurve::Fade;
+    double lowerThreshold = 0.95;    ///< M_s / M_c of the bifurcation curve, in [0.5, 1]: spikes that
+                                     ///< stand collapse below M_s; 1 = no hysteresis (then no jump)
     double magnetizationFade = 0.25; ///< height ramps from 0 at |M| = M_c to full at (1 + fade) M_c
     /// Spikes follow the field with this time constant [s], >= 0: a spike's height is the
     /// heights its |M| gave over the past, averaged with weight exp(-(t - t') / growthTime),
@@ -76,6 +87,14 @@ struct SpikeParams {
     /// particles) the pattern's new outer rings were born up to 1.13 mm tall in one frame (22 %
     /// of the final tallest tip, 5.1 mm); at 0.2 s no tip jumps more than 0.67 mm (13 %).
     double growthTime = 0.2;
+    /// Tips carried by the fluid's flow (SurfaceFlow.hpp) [s], in [0, 5]: each tip moves with
+    /// the surface velocity under it and the field pulls it back to its lattice site with this
+    /// time constant, dX/dt = u + (L - X) / response_time. A sloshing layer rocks the spikes
+    /// with it; a magnet that slides faster than the pattern follows leaves them trailing.
+    /// 0 = the paper: the tips are laid out anew from the field in every frame. Needs the
+    /// particle files of the frames 4 response times back (ferro-spikes reads them from the
+    /// --particles pattern; a single frame without a pattern is laid out anew).
+    double responseTime = 0.0;
     double wallMargin = 0.0;         ///< surface closer than this to a container wall is wetted wall,
                                      ///< never spiky [m]; 0 = 1.5 particle spacings (2 mm if unknown)
     double wallFade = 0.0;           ///< height ramps in over this distance from the wetted wall [m];

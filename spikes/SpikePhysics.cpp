@@ -3,6 +3,7 @@
 
 #include "sim/magnets/LangevinLaw.hpp"
 
+#include <algorithm>
 #include <cmath>
 #include <limits>
 
@@ -73,6 +74,22 @@ double squareProfile(double a, double b)
 {
     const double g = 0.5 * (std::cos(2 * kPi * a) + std::cos(2 * kPi * b));
     return 2.25 * g + g * g - 0.25;
+}
+
+SpikeBifurcation SpikeBifurcation::fromThresholds(double lowerThreshold, double epsFull)
+{
+    SpikeBifurcation b;
+    const double h = std::clamp(1.0 - lowerThreshold, 0.0, 1.0);
+    b.gamma = 2 * h + std::sqrt(4 * h * h + 4 * h * epsFull);
+    b.g = b.gamma + epsFull;
+    b.lower = -h;
+    return b;
+}
+
+double SpikeBifurcation::upperBranch(double eps) const
+{
+    if (eps < lower) return 0.0;
+    return (gamma + std::sqrt(std::max(0.0, gamma * gamma + 4 * g * eps))) / (2 * g);
 }
 
 double sharpenedProfile(double F, double p)

@@ -54,6 +54,33 @@ double hexProfile(double a, double b);
 /// the mean level), the sharpening and the volume work unchanged on either planform.
 double squareProfile(double a, double b);
 
+/// The hexagons' amplitude equation near onset (weakly nonlinear theory of the normal-field
+/// instability; Gailitis 1977, Friedrichs & Engel 2001), in the supercriticality
+/// eps = M / M_c - 1 and the amplitude a relative to full height:
+///     tau da/dt = eps a + gamma a^2 - g a^3.
+/// Hexagons bifurcate subcritically (gamma > 0, the quadratic term that three wave vectors
+/// at 120 degrees allow): a flat layer is stable below eps = 0, spikes of finite height stand
+/// from eps_s = -gamma^2 / (4 g) on. So the height jumps at onset, and spikes that stand
+/// persist as the field falls below onset down to the lower threshold M_s = (1 + eps_s) M_c,
+/// where they collapse (the hysteresis Gollwitzer et al. 2007 measured). The two
+/// coefficients come from two numbers one reads off a measured sweep: the lower threshold
+/// M_s / M_c and the supercriticality eps_full at which the spikes reach full height a = 1.
+struct SpikeBifurcation {
+    double gamma = 0;     ///< quadratic coefficient, >= 0
+    double g = 1;         ///< cubic coefficient, > 0
+    double lower = 0;     ///< eps_s = -gamma^2 / (4 g) <= 0: the lower threshold's supercriticality
+
+    /// From M_s / M_c = lowerThreshold in (0, 1] and eps_full > 0: eps_s = lowerThreshold - 1,
+    /// and the upper branch through (eps_full, 1):
+    ///     gamma = 2 h + sqrt(4 h^2 + 4 h eps_full),  g = gamma + eps_full   (h = -eps_s).
+    /// lowerThreshold = 1 gives the supercritical pitchfork a = sqrt(eps / eps_full).
+    static SpikeBifurcation fromThresholds(double lowerThreshold, double epsFull);
+    /// The stable stationary amplitude on the spikes' branch,
+    ///     a*(eps) = (gamma + sqrt(gamma^2 + 4 g eps)) / (2 g)   for eps >= eps_s, else 0:
+    /// gamma / g at onset (the jump), gamma / (2 g) at the lower threshold, 1 at eps_full.
+    double upperBranch(double eps) const;
+};
+
 /// The profile of height F (in [-1.5, 3]) narrowed by exponent p >= 1:
 /// 4.5 ((F + 1.5) / 4.5)^p - 1.5. p = 1 is F itself; tips stay at 3, troughs at -1.5.
 double sharpenedProfile(double F, double p);

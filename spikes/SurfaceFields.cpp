@@ -31,6 +31,7 @@ SurfaceFields::SurfaceFields(const SpikeInput& in, const SpikeParams& p, double 
         particleGrid_ = std::make_unique<HashGrid>(particles.positions, radius_);
     }
     wallMargin_ = p.wallMargin > 0 ? p.wallMargin : (spacing_ > 0 ? 1.5 * spacing_ : 2e-3);
+    branch_ = SpikeBifurcation::fromThresholds(p.lowerThreshold, p.magnetizationFade);
 }
 
 Vec3d SurfaceFields::field(const Vec3d& x, const Vec3d& n) const
@@ -56,6 +57,16 @@ double SurfaceFields::currentMagnetization(const Vec3d& x, const Vec3d& H) const
     return langevinMagnetization(H.norm(), in_.fluid.law.susceptibility, in_.fluid.law.saturation);
 }
 
+double SurfaceFields::pastMagnetization(const Vec3d& x, double Mnow, double scale, double lawNow,
+                                        const std::vector<Magnet>& past) const
+{
+    const MagnetizationParams& law = in_.fluid.law;
+    const double then =
+        langevinMagnetization(scale * magnetField(past, x).norm(), law.susceptibility, law.saturation);
+    // No field now (a magnet just switched off): the law's past value, unscaled.
+    return lawNow > 0 ? Mnow * then / lawNow : then;
+}
+
 std::vector<double> SurfaceFields::magnetizationHistory(const Vec3d& x, const Vec3d& H) const
 {
     const double M = currentMagnetization(x, H);
@@ -69,13 +80,56 @@ std::vector<double> SurfaceFields::magnetizationHistory(const Vec3d& x, const Ve
     const MagnetizationParams& law = in_.fluid.law;
     const double now = langevinMagnetization(scale * magnetField(in_.pastMagnets[0], x).norm(), law.susceptibility,
                                              law.saturation);
-    for (size_t k = 1; k < in_.pastMagnets.size(); ++k) {
-        const double then = langevinMagnetization(scale * magnetField(in_.pastMagnets[k], x).norm(),
-                                                  law.susceptibility, law.saturation);
-        // No field now (a magnet just switched off): the law's past value, unscaled.
-        history.push_back(now > 0 ? M * then / now : then);
-    }
+    for (size_t k = 1; k < in_.pastMagnets.size(); ++k)
+        history.push_back(pastMagnetization(x, M, scale, now, in_.pastMagnets[k]));
     return history;
+}
+
+std::vector<char> SurfaceFields::spikesStood(const Vec3d& x, const Vec3d& H, const std::vector<double>& history) const
+{
+    std::vector<char> stood(history.size(), 0);
+    if (!std::isfinite(Mc_)) return stood;
+    const double Ms = (1 + branch_.lower) * Mc_;
+    // The state before the oldest sample: decided there unless it lies in the band [M_s, M_c).
+    bool state = history.back() >= Mc_;
+    if (history.back() >= Ms && history.back() < Mc_ && in_.tracks && in_.lookbackStep > 0) {
+        const double Hm = magnetField(in_.magnets, x).norm();
+        const double scale = Hm > 0 ? H.norm() / Hm : 1.0;
+        const MagnetizationParams& law = in_.fluid.law;
+        auto magnetsAt = [&](double t) {
+            std::vector<Magnet> m;
+            for (const MagnetTrack& track : *in_.tracks) m.push_back(track.at(t));
+            return m;
+        };
+        const double lawNow =
+            langevinMagnetization(scale * magnetField(magnetsAt(in_.time), x).norm(), law.susceptibility, law.saturation);
+        const double step = in_.lookbackStep;
+        double t = in_.time - double(history.size() - 1) * (in_.pastMagnets.empty() ? 0.0 : step);
+        // Back to the shot's start (the tracks hold their first keys before it: a layer that
+        // sat in the band from the start never had spikes), at most 4096 steps.
+        for (int k = 0; k < 4096 && t > 0; ++k) {
+            t -= step;
+            const double M = pastMagnetization(x, history.front(), scale, lawNow, magnetsAt(t));
+            if (M >= Mc_) { state = true; break; }
+            if (M < Ms) break;
+        }
+    }
+    for (size_t k = history.size(); k-- > 0;) {
+        if (history[k] >= Mc_) state = true;
+        else if (history[k] < Ms) state = false;
+        stood[k] = state;
+    }
+    return stood;
+}
+
+double SurfaceFields::fieldHistoryMean(const Vec3d& x, const Vec3d& H) const
+{
+    if (in_.pastMagnets.size() < 2) return H.norm();
+    double past = 0;
+    for (size_t k = 0; k < in_.pastMagnets.size(); ++k)
+        past += in_.pastWeights[k] * magnetField(in_.pastMagnets[k], x).norm();
+    const double now = magnetField(in_.pastMagnets[0], x).norm();
+    return now > 0 ? H.norm() * past / now : past;
 }
 
 double SurfaceFields::magnetization(const Vec3d& x, const Vec3d& H) const
@@ -84,23 +138,48 @@ double SurfaceFields::magnetization(const Vec3d& x, const Vec3d& H) const
     return *std::max_element(h.begin(), h.end());
 }
 
-double SurfaceFields::historyMean(const Vec3d& x, const Vec3d& H, double (SurfaceFields::*fade)(double) const) const
+bool SurfaceFields::spiky(const Vec3d& x, const Vec3d& H) const
+{
+    if (!bifurcation()) return magnetization(x, H) > Mc_;
+    const std::vector<double> h = magnetizationHistory(x, H);
+    const std::vector<char> stood = spikesStood(x, H, h);
+    return std::find(stood.begin(), stood.end(), 1) != stood.end();
+}
+
+double SurfaceFields::historyMean(const Vec3d& x, const Vec3d& H, double (SurfaceFields::*curve)(double, bool) const) const
 {
     const std::vector<double> h = magnetizationHistory(x, H);
-    if (h.size() == 1) return (this->*fade)(h[0]);
+    std::vector<char> stood(h.size(), 1);
+    if (bifurcation()) stood = spikesStood(x, H, h);
+    if (h.size() == 1) return (this->*curve)(h[0], stood[0]);
     double f = 0;
-    for (size_t k = 0; k < h.size(); ++k) f += in_.pastWeights[k] * (this->*fade)(h[k]);
+    for (size_t k = 0; k < h.size(); ++k) f += in_.pastWeights[k] * (this->*curve)(h[k], stood[k]);
     return f;
 }
 
 double SurfaceFields::heightFade(const Vec3d& x, const Vec3d& H) const
 {
-    return historyMean(x, H, &SurfaceFields::magnetizationFade);
+    return historyMean(x, H, &SurfaceFields::heightCurve);
 }
 
 double SurfaceFields::surfaceGate(const Vec3d& x, const Vec3d& H) const
 {
-    return historyMean(x, H, &SurfaceFields::magnetizationGate);
+    return historyMean(x, H, &SurfaceFields::gateCurve);
+}
+
+double SurfaceFields::heightCurve(double M, bool stood) const
+{
+    if (!bifurcation()) return magnetizationFade(M);
+    if (!stood || !std::isfinite(Mc_)) return 0.0;
+    return std::min(1.0, branch_.upperBranch(M / Mc_ - 1.0));
+}
+
+double SurfaceFields::gateCurve(double M, bool stood) const
+{
+    if (!bifurcation()) return magnetizationGate(M);
+    if (!stood || !std::isfinite(Mc_)) return 0.0;
+    const double Ms = (1 + branch_.lower) * Mc_;
+    return smoothstep01((M - Ms) / (0.05 * std::max(Mc_, 1e-30)));
 }
 
 double SurfaceFields::magnetizationFade(double M) const

@@ -46,9 +46,23 @@ public:
     /// |M| at x now and at the input's past times (SpikeInput::pastMagnets): now first, the
     /// past ones scaled by the law at the magnets' past field there.
     std::vector<double> magnetizationHistory(const Vec3d& x, const Vec3d& H) const;
+    /// |H| [A/m] at x averaged over the history with SpikeInput::pastWeights: |H| now times the
+    /// weighted mean of the magnets' past |H| there over their |H| now (|H| itself in a still
+    /// field). The paper's spacing l = alpha / |H| takes it, so a pattern whose field falls away
+    /// sinks on the lattice it stood on instead of jumping to the widest spacing in a frame.
+    double fieldHistoryMean(const Vec3d& x, const Vec3d& H) const;
     /// The largest |M| of the history: where spikes stand, grow or still fade out (the
     /// mapping area, the pattern, the lattice's extent). currentMagnetization in a still field.
     double magnetization(const Vec3d& x, const Vec3d& H) const;
+    /// Where spikes stand, grow or still sink at x: the fade curve, magnetization > M_c; the
+    /// bifurcation curve, spikes stood at some time of the history (spikesStood).
+    bool spiky(const Vec3d& x, const Vec3d& H) const;
+    /// The bifurcation curve's relay, per sample of magnetizationHistory (k = 0 now): spikes
+    /// stand once |M| has reached M_c and until it falls below the lower threshold M_s. The
+    /// state before the history's oldest sample, when that one lies between M_s and M_c, is
+    /// found by looking further back along the magnet tracks (SpikeInput::tracks) for the
+    /// last time |M| left that band (none: no spikes, a layer never made supercritical).
+    std::vector<char> spikesStood(const Vec3d& x, const Vec3d& H, const std::vector<double>& history) const;
     /// magnetizationFade and magnetizationGate averaged over the history with
     /// SpikeInput::pastWeights (SpikeParams::growthTime): a spike's height follows its past
     /// heights, so a field that jumps on grows the spikes over a few growth times.
@@ -61,12 +75,26 @@ public:
     /// 0 at M_c, 1 from 1.05 M_c on, smooth: cuts the surface exactly where |M| drops below M_c.
     double magnetizationGate(double M) const;
 
+    /// The input these fields are evaluated on.
+    const SpikeInput& input() const { return in_; }
+
     /// True where x is closer than the wall margin to the container's walls (never spiky).
     bool wetted(const Vec3d& x) const;
 
 private:
-    /// The pastWeights-weighted mean of `fade` over magnetizationHistory(x, H).
-    double historyMean(const Vec3d& x, const Vec3d& H, double (SurfaceFields::*fade)(double) const) const;
+    /// The pastWeights-weighted mean of `fade` over magnetizationHistory(x, H), each sample
+    /// with its relay state (always true for the fade curve).
+    double historyMean(const Vec3d& x, const Vec3d& H, double (SurfaceFields::*fade)(double, bool) const) const;
+    /// The curves per sample: height (magnetizationFade, or the bifurcation's upper branch
+    /// capped at 1 where spikes stand) and gate (magnetizationGate, or 0 to 1 over 0.05 M_c
+    /// above M_s where spikes stand).
+    double heightCurve(double M, bool stood) const;
+    double gateCurve(double M, bool stood) const;
+    /// |M| at x under past magnets, scaled from the frame's |M| now (see magnetizationHistory).
+    double pastMagnetization(const Vec3d& x, double Mnow, double scale, double lawNow,
+                             const std::vector<Magnet>& past) const;
+    bool bifurcation() const { return p_.heightCurve == SpikeParams::HeightCurve::Bifurcation; }
+    SpikeBifurcation branch_;
 
     const SpikeInput& in_;
     const SpikeParams& p_;

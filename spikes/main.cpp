@@ -28,6 +28,10 @@ int main(int argc, char** argv) {
     app.add_option("--scene,-s", scenePath, "scene file (TOML): fluid, container, magnets, [spikes]")->required();
     auto* outOpt = app.add_option("--out,-o", out, "output mesh (or pattern); PLY unless the extension says otherwise");
     addSceneInputsFlag(app, printInputs, {surfaceOpt, outOpt});
+    std::string history;
+    app.add_option("--particle-history", history,
+                   "particle files of earlier frames ({:04} / %04d pattern) for [spikes] response_time: the tips "
+                   "ride the flow they hold (default with --frames: the --particles pattern)");
     app.add_option("--frames", frames, "frame range A:B (inclusive) for patterns")->type_name("A:B");
     addSetOption(app, overrides, "override a scene key: --set spikes.alpha=80");
     addThreadsOption(app, threads, "worker threads (0 = all cores)");
@@ -46,11 +50,13 @@ int main(int argc, char** argv) {
         const auto limit = limitThreads(threads);
         const SpikeScene scene = parseSpikeScene(doc);
         if (range.first < 0) {
-            const SpikeResult res = spikeFrame(scene, surface, particles, out);
+            const SpikeResult res = spikeFrame(scene, surface, particles, out, -1, history);
             if (!quiet)
                 std::cerr << "ferro-spikes: " << res.tips.size() << " tips, " << res.mesh.triangles.size()
                           << " triangles -> " << out << "\n";
         } else {
+            if (!history.empty() && history != particles)
+                throw SpikeInputError("--particle-history: with --frames the history is the --particles pattern");
             spikeFrames(scene, surface, particles, out, range.first, range.last, quiet);
         }
         return kExitOk;

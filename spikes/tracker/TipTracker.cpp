@@ -6,6 +6,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
+#include <cstdlib>
 #include <sstream>
 #include <cstdint>
 #include <limits>
@@ -48,6 +49,17 @@ std::vector<SpikeTipSample> findTips(const TriangleMesh& spiky, const TriangleMe
         bool near2 = false;
         for (const auto& k : kept) near2 = near2 || (k.position - t.position).norm() < radius;
         if (!near2) kept.push_back(t);
+    }
+    // The surface under each tip: the nearest surface vertex to the point the tip's height
+    // below it along the normal there (for a leaning spike, closer to its foot than the
+    // apex's own nearest vertex).
+    const bool velocities = surface.velocities.size() == surface.vertices.size();
+    for (auto& t : kept) {
+        const uint32_t j0 = near.nearest(t.position);
+        const uint32_t j = near.nearest(t.position - t.height * normals[j0]);
+        t.normal = normals[j];
+        if (velocities) t.surfaceVelocity = surface.velocities[j].cast<double>();
+        t.hasVelocity = velocities;
     }
     return kept;
 }
@@ -132,7 +144,7 @@ std::vector<Vec3d> predictPositions(const std::vector<SpikeTipSample>& a, const 
 } // namespace
 
 TipFrameMatch matchTips(const std::vector<SpikeTipSample>& a, const std::vector<SpikeTipSample>& b, double gate,
-                        double edgeFraction, bool predict) {
+                        double edgeFraction, bool predict, double interval) {
     TipFrameMatch m;
     m.tipsA = int(a.size());
     m.tipsB = int(b.size());
@@ -169,6 +181,7 @@ TipFrameMatch matchTips(const std::vector<SpikeTipSample>& a, const std::vector<
 
     std::vector<char> usedB(b.size(), 0);
     std::vector<double> moves;
+    double sumU = 0, sumV = 0, sumDiff = 0;
     int stable = 0, interior = 0, interiorStable = 0;
     const auto inside = [&](double h, double hmax) { return h >= edgeFraction * hmax; };
     for (uint32_t i = 0; i < a.size(); ++i) {
@@ -182,6 +195,17 @@ TipFrameMatch matchTips(const std::vector<SpikeTipSample>& a, const std::vector<
         if (inside(a[i].height, hA) || inside(b[j].height, hB)) {
             ++interior;
             interiorStable += d < 0.1 * m.spacing;
+            if (interval > 0 && a[i].hasVelocity && b[j].hasVelocity) {
+                Vec3d n = a[i].normal + b[j].normal;
+                n = n.norm() > 0 ? Vec3d(n.normalized()) : Vec3d(0, 0, 1);
+                auto along = [&](const Vec3d& v) { return Vec3d(v - v.dot(n) * n); };
+                const Vec3d v = along((b[j].position - a[i].position) / interval);
+                const Vec3d u = along(0.5 * (a[i].surfaceVelocity + b[j].surfaceVelocity));
+                sumU += u.norm();
+                sumV += v.norm();
+                sumDiff += (v - u).norm();
+                ++m.flowTips;
+            }
         }
         m.maxHeightJump = std::max(m.maxHeightJump, std::abs(a[i].height - b[j].height));
     }
@@ -205,6 +229,11 @@ TipFrameMatch matchTips(const std::vector<SpikeTipSample>& a, const std::vector<
         m.medianMove = moves[moves.size() / 2];
         m.maxMove = moves.back();
     }
+    if (m.flowTips > 0) {
+        m.surfaceSpeed = sumU / m.flowTips;
+        m.tipSpeed = sumV / m.flowTips;
+        m.flowMismatch = sumU > 0 ? sumDiff / sumU : 0.0;
+    }
     m.stableFraction = double(stable) / double(std::max(a.size(), b.size()));
     m.interiorStableFraction = interior ? double(interiorStable) / double(interior) : 1.0;
     m.maxHeightJump = m.largestTip > 0 ? m.maxHeightJump / m.largestTip : 0.0;
@@ -215,12 +244,19 @@ TipTrack trackTips(const std::string& spikyPattern, const std::string& surfacePa
                    const TipFinderParams& params, double gate, double edgeFraction, bool predict) {
     TipTrack track;
     track.first = first;
+    double lastTime = std::nan("");
     for (int f = first; f <= last; ++f) {
         const TriangleMesh spiky = readMesh(framePath(spikyPattern, f));
         const TriangleMesh surface = readMesh(framePath(surfacePattern, f));
         track.tips.push_back(findTips(spiky, surface, params));
+        double time = std::nan("");
+        for (const auto& [key, value] : surface.comments)
+            if (key == "time") time = std::strtod(value.c_str(), nullptr);
+        const double interval = time - lastTime; // NaN without both times: no flow statistics
+        lastTime = time;
         if (track.tips.size() >= 2)
-            track.steps.push_back(matchTips(track.tips[track.tips.size() - 2], track.tips.back(), gate, edgeFraction, predict));
+            track.steps.push_back(matchTips(track.tips[track.tips.size() - 2], track.tips.back(), gate, edgeFraction,
+                                            predict, interval > 0 ? interval : 0.0));
     }
     return track;
 }
@@ -228,14 +264,16 @@ TipTrack trackTips(const std::string& spikyPattern, const std::string& surfacePa
 std::string tipTrackCsv(const TipTrack& track) {
     std::ostringstream o;
     o << "frame,tips,matched,born,died,interior_born,interior_died,spacing_mm,median_move_mm,max_move_mm,"
-         "stable_fraction,interior_stable_fraction,max_height_jump,largest_tip_mm,max_residual_mm\n";
+         "stable_fraction,interior_stable_fraction,max_height_jump,largest_tip_mm,max_residual_mm,flow_tips,"
+         "surface_speed_mm_s,tip_speed_mm_s,flow_mismatch\n";
     for (size_t k = 0; k < track.steps.size(); ++k) {
         const TipFrameMatch& m = track.steps[k];
-        char row[256];
-        std::snprintf(row, sizeof row, "%d,%d,%d,%d,%d,%d,%d,%.4f,%.4f,%.4f,%.4f,%.4f,%.4f,%.4f,%.4f\n",
+        char row[384];
+        std::snprintf(row, sizeof row, "%d,%d,%d,%d,%d,%d,%d,%.4f,%.4f,%.4f,%.4f,%.4f,%.4f,%.4f,%.4f,%d,%.4f,%.4f,%.4f\n",
                       track.first + int(k) + 1, m.tipsB, m.matched, m.born, m.died, m.interiorBorn, m.interiorDied,
                       1e3 * m.spacing, 1e3 * m.medianMove, 1e3 * m.maxMove, m.stableFraction, m.interiorStableFraction,
-                      m.maxHeightJump, 1e3 * m.largestTip, 1e3 * m.maxResidual);
+                      m.maxHeightJump, 1e3 * m.largestTip, 1e3 * m.maxResidual, m.flowTips, 1e3 * m.surfaceSpeed,
+                      1e3 * m.tipSpeed, m.flowMismatch);
         o << row;
     }
     return o.str();

@@ -19,6 +19,9 @@ namespace ferro {
 struct SpikeTipSample {
     Vec3d position;     ///< the tip vertex [m]
     double height = 0;  ///< height above the undisplaced surface [m]
+    Vec3d normal{0, 0, 1};                 ///< the undisplaced surface's unit normal under the tip
+    Vec3d surfaceVelocity = Vec3d::Zero(); ///< the undisplaced surface's velocity under the tip [m/s]
+    bool hasVelocity = false;              ///< the surface mesh had vertex velocities
 };
 
 struct TipFinderParams {
@@ -57,6 +60,14 @@ struct TipFrameMatch {
     /// Largest distance of a matched tip of b from where the motion of its matched neighbours
     /// predicted it [m] (the raw move when matching without prediction).
     double maxResidual = 0;
+    /// Do the tips move with the fluid under them? Over the matched interior tips of both
+    /// frames' surfaces with velocities, along the surface (the mean of the two normals):
+    /// a tip's velocity v = its move / the frame interval, the fluid's u = the mean of the
+    /// surface velocity under it in the two frames. 0 when there is no interval or velocity.
+    int flowTips = 0;            ///< the tips compared
+    double surfaceSpeed = 0;     ///< mean |u| [m/s]
+    double tipSpeed = 0;         ///< mean |v| [m/s]
+    double flowMismatch = 0;     ///< sum |v - u| / sum |u| (0 = the tips ride the flow exactly)
 };
 
 /// Matches b's tips to a's: pairs in order of increasing distance, each tip used once, only
@@ -74,8 +85,9 @@ struct TipFrameMatch {
 /// within the gate. A tip that really appears, vanishes or jumps against its neighbours
 /// still falls outside the gate. Moves (and the 0.1 l stability) stay the raw distances a
 /// tip travelled.
+/// With `interval` > 0 [s] (frame b's time minus a's), also the flow statistics above.
 TipFrameMatch matchTips(const std::vector<SpikeTipSample>& a, const std::vector<SpikeTipSample>& b,
-                        double gate = 0.5, double edgeFraction = 0.25, bool predict = true);
+                        double gate = 0.5, double edgeFraction = 0.25, bool predict = true, double interval = 0);
 
 /// A shot's tips over a frame range: the tips of every frame and the match of each frame to
 /// the next.
@@ -94,7 +106,8 @@ TipTrack trackTips(const std::string& spikyPattern, const std::string& surfacePa
 
 /// The track as CSV: one row per step (frame, tips, matched, born, died, interior_born,
 /// interior_died, spacing_mm, median_move_mm, max_move_mm, stable_fraction, interior_stable_fraction,
-/// max_height_jump, largest_tip_mm, max_residual_mm).
+/// max_height_jump, largest_tip_mm, max_residual_mm, flow_tips, surface_speed_mm_s,
+/// tip_speed_mm_s, flow_mismatch). The frame interval comes from the meshes' `time` headers.
 std::string tipTrackCsv(const TipTrack& track);
 
 } // namespace ferro

@@ -68,6 +68,19 @@ int main(int argc, char** argv) {
                      "ferro-tips: %zu steps: worst stable fraction %.3f (interior %.3f), largest height jump %.3f of the largest tip, "
                      "%d interior births/deaths\n",
                      track.steps.size(), worstStable, worstInterior, worstJump, interior);
+        // Against the fluid under them (surface meshes with velocities and `time` headers):
+        // over all compared tips of all steps, sum |v - u| / sum |u|.
+        double sumU = 0, sumDiff = 0;
+        int compared = 0;
+        for (const TipFrameMatch& m : track.steps) {
+            sumU += m.surfaceSpeed * m.flowTips;
+            sumDiff += m.flowMismatch * m.surfaceSpeed * m.flowTips;
+            compared += m.flowTips;
+        }
+        if (compared > 0 && sumU > 0)
+            std::fprintf(stderr, "ferro-tips: %d tip moves against the surface under them: mean surface speed %.2f mm/s, "
+                         "tips' velocity off it by %.3f of it (sum |v - u| / sum |u|)\n",
+                         compared, 1e3 * sumU / compared, sumDiff / sumU);
         return kExitOk;
     });
 }

@@ -154,3 +154,39 @@ TEST_CASE("matchTips follows a contracting or sliding lattice and still catches 
         REQUIRE(m.died == 1);
     }
 }
+
+TEST_CASE("matchTips compares each tip's move with the surface velocity under it: 0 riding the flow, 1 standing still or moving twice as fast",
+          "[tips][flow]") {
+    // Tips 5 mm apart, the surface under them sliding at u (and heaving along the normal,
+    // which does not count); frame b 1/30 s later.
+    const double dt = 1.0 / 30;
+    const Vec3d u(0.012, -0.005, 0.0), heave(0, 0, 0.02);
+    std::vector<SpikeTipSample> a;
+    for (const TrueTip& t : lattice(0.02, 2e-3)) {
+        SpikeTipSample s;
+        s.position = Vec3d(t.x, t.y, 0.005 + t.h);
+        s.height = t.h;
+        s.surfaceVelocity = u + heave;
+        s.hasVelocity = true;
+        a.push_back(s);
+    }
+    auto moved = [&](double factor) {
+        std::vector<SpikeTipSample> b = a;
+        for (auto& s : b) s.position += factor * u * dt;
+        return b;
+    };
+    const TipFrameMatch riding = matchTips(a, moved(1.0), 0.5, 0.25, true, dt);
+    REQUIRE(riding.flowTips == riding.matched);
+    REQUIRE(riding.flowTips > 40);
+    REQUIRE(riding.flowMismatch < 1e-9);
+    REQUIRE(riding.surfaceSpeed == Approx(u.norm()).epsilon(1e-9));
+    REQUIRE(riding.tipSpeed == Approx(u.norm()).epsilon(1e-9));
+    REQUIRE(matchTips(a, moved(0.0), 0.5, 0.25, true, dt).flowMismatch == Approx(1.0).epsilon(1e-9));
+    REQUIRE(matchTips(a, moved(2.0), 0.5, 0.25, true, dt).flowMismatch == Approx(1.0).epsilon(1e-9));
+    REQUIRE(matchTips(a, moved(0.9), 0.5, 0.25, true, dt).flowMismatch == Approx(0.1).epsilon(1e-6));
+    // Without an interval, or without velocities, nothing is compared.
+    REQUIRE(matchTips(a, moved(1.0)).flowTips == 0);
+    std::vector<SpikeTipSample> still = a;
+    for (auto& s : still) s.hasVelocity = false;
+    REQUIRE(matchTips(still, moved(1.0), 0.5, 0.25, true, dt).flowTips == 0);
+}

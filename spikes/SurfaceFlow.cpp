@@ -1,0 +1,136 @@
+// The flow history of SurfaceFlow.hpp: earlier frames' particles and the tips they carry.
+#include "spikes/SurfaceFlow.hpp"
+
+#include "sim/core/ParticleFile.hpp"
+#include "sim/magnets/MagnetState.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <fstream>
+
+namespace ferro {
+
+namespace {
+
+bool fileExists(const std::string& path)
+{
+    std::ifstream f(path);
+    return f.good();
+}
+
+// The sample of one particle file; false when it has no velocity columns (such a file ends
+// the history: the flow before it is unknown).
+bool readSample(const std::string& path, double fallbackTime, FlowSample& s)
+{
+    const ParticleTable table = readParticleFile(path);
+    if (table.column("vx") < 0 || table.column("vy") < 0 || table.column("vz") < 0) return false;
+    const std::vector<Vec3> x = table.vec3("x", "y", "z"), v = table.vec3("vx", "vy", "vz");
+    s.time = table.commentNumber("time", fallbackTime);
+    std::vector<Vec3d> positions;
+    positions.reserve(x.size());
+    s.velocity.reserve(v.size());
+    for (size_t i = 0; i < x.size(); ++i) {
+        if (!x[i].allFinite() || !v[i].allFinite())
+            throw ParticleFileError(path + ": particle " + std::to_string(i) + " has a non-finite position or velocity");
+        positions.push_back(x[i].cast<double>());
+        s.velocity.push_back(v[i].cast<double>());
+    }
+    double spacing = table.commentNumber("spacing", 0.0);
+    if (!(spacing > 0) && !positions.empty()) { // no header: the mean spacing of the bounding box
+        Vec3d lo = positions[0], hi = positions[0];
+        for (const Vec3d& p : positions) {
+            lo = lo.cwiseMin(p);
+            hi = hi.cwiseMax(p);
+        }
+        const Vec3d e = (hi - lo).cwiseMax(1e-6);
+        spacing = std::cbrt(e.x() * e.y() * e.z() / double(positions.size()));
+    }
+    s.radius = 2.0 * spacing;
+    s.grid = std::make_unique<HashGrid>(positions, s.radius > 0 ? s.radius : 1e-3);
+    if (table.comment("magnet_count").size()) s.magnets = readMagnetComments(table);
+    return true;
+}
+
+// The component of v along the surface of unit normal n.
+Vec3d alongSurface(const Vec3d& v, const Vec3d& n) { return v - v.dot(n) * n; }
+
+} // namespace
+
+std::shared_ptr<const SurfaceFlowHistory> SurfaceFlowHistory::load(const std::string& pattern, int frame, double tau,
+                                                                   double fps)
+{
+    std::vector<FlowSample> samples;
+    if (!(tau > 0) || !(fps > 0) || frame < 0) return std::make_shared<SurfaceFlowHistory>(std::move(samples));
+    // Samples half a response time apart over four of them (the tail beyond weighs e^-4);
+    // between them the velocity is interpolated, which a flow slower than tau / 2 allows.
+    const int stride = std::max(1, int(std::lround(0.5 * tau * fps)));
+    const int oldest = std::max(0, frame - int(std::ceil(4.0 * tau * fps)));
+    for (int f = frame; f >= oldest; f -= stride) {
+        const std::string path = framePath(pattern, f);
+        if (!fileExists(path)) break;
+        FlowSample s;
+        if (!readSample(path, f / fps, s)) break;
+        samples.push_back(std::move(s));
+        if (f - stride < oldest && f > oldest) f = oldest + stride; // end exactly on the oldest frame
+    }
+    return std::make_shared<SurfaceFlowHistory>(std::move(samples));
+}
+
+SurfaceFlowHistory::SurfaceFlowHistory(std::vector<FlowSample> samples) : samples_(std::move(samples))
+{
+    std::sort(samples_.begin(), samples_.end(), [](const FlowSample& a, const FlowSample& b) { return a.time < b.time; });
+}
+
+Vec3d SurfaceFlowHistory::velocityAt(size_t k, const Vec3d& x) const
+{
+    const FlowSample& s = samples_[k];
+    if (!s.grid || s.grid->empty()) return Vec3d::Zero();
+    Vec3d sum = Vec3d::Zero();
+    double weight = 0;
+    const double r2 = s.radius * s.radius;
+    s.grid->forEachWithin(x, s.radius, [&](uint32_t i, double d2) {
+        const double q = 1.0 - d2 / r2;
+        const double w = q * q * q;
+        sum += w * s.velocity[i];
+        weight += w;
+    });
+    if (weight > 0) return sum / weight;
+    return s.velocity[s.grid->nearest(x)];
+}
+
+Vec3d SurfaceFlowHistory::carriedOffset(const Vec3d& site, const Vec3d& n, int magnet, double tau, double t) const
+{
+    // The samples up to t (a little slack for times written as floats).
+    size_t count = 0;
+    while (count < samples_.size() && samples_[count].time <= t + 1e-6) ++count;
+    if (count == 0 || !(tau > 0)) return Vec3d::Zero();
+    const FlowSample& latest = samples_[count - 1];
+    // Where the site stood at sample k: moved back by the pattern's magnet's move since then.
+    auto siteAt = [&](size_t k) -> Vec3d {
+        const std::vector<Magnet>& then = samples_[k].magnets;
+        const std::vector<Magnet>& now = latest.magnets;
+        if (magnet < 0 || size_t(magnet) >= then.size() || size_t(magnet) >= now.size() ||
+            now[size_t(magnet)].kind == MagnetKind::Uniform)
+            return site;
+        return site - alongSurface(now[size_t(magnet)].position - then[size_t(magnet)].position, n);
+    };
+    Vec3d d = Vec3d::Zero();
+    for (size_t k = 0; k < count; ++k) {
+        const double a = samples_[k].time;
+        const double b = k + 1 < count ? samples_[k + 1].time : t;
+        const double dt = b - a;
+        if (!(dt > 0)) continue;
+        const Vec3d La = siteAt(k), Lb = k + 1 < count ? siteAt(k + 1) : La;
+        const Vec3d siteVelocity = (Lb - La) / dt;
+        // The forcing u - dL/dt at both ends, the far end's velocity where the tip would be
+        // with the offset it has now; the last interval (past the last sample) holds it.
+        const Vec3d fa = alongSurface(velocityAt(k, La + d), n) - siteVelocity;
+        const Vec3d fb = k + 1 < count ? Vec3d(alongSurface(velocityAt(k + 1, Lb + d), n) - siteVelocity) : fa;
+        // dd/dt = f(s) - d / tau with f linear over [a, b], integrated exactly.
+        const double E = std::exp(-dt / tau);
+        d = d * E + fa * tau * (1 - E) + (fb - fa) * tau * (1 - tau * (1 - E) / dt);
+    }
+    return d;
+}
+
+} // namespace ferro
