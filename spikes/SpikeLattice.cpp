@@ -163,17 +163,48 @@ void jitterTips(const TraceFrame& f, LatticeTips& lattice, const SpikeParams& P,
     }
 }
 
-// SpikeParams::responseTime: each tip moved by the offset the fluid's flow carried it from its
-// lattice site (SurfaceFlowHistory::carriedOffset, at most one spacing: a tip never strays
-// into the next one's place), then dropped onto the surface as the traced tips are. The
-// lattice maps are built afterwards from the moved tips, so the profile follows them.
-void carryTips(const TraceFrame& f, LatticeTips& lattice, const SpikeParams& P, int magnet)
+// SpikeParams::responseTime, the pattern's part: its anchor rides the fluid's flow and relaxes
+// towards the magnet's foot x0 (SurfaceFlowHistory::carriedOffset, d0 from x0, no bound). A
+// lattice shifted by whole lattice vectors is the same lattice, so the pattern is traced from
+// x0 plus the fraction of d0 within one cell, and its tips' lattice coordinates are counted
+// from where the flow took them: (i, j) - the whole cells (di, dj) in d0. So the tips move with the flow as
+// far as it carries them, while the pattern still covers the supercritical region around the
+// magnet: a magnet sliding faster than tau leaves its tips behind, where they sink, and new
+// ones rise ahead. The coordinates stay a tip's own from frame to frame (its jitter, its
+// defect, its velocity from the frame before). Returns the whole cells (di, dj) and sets
+// `anchor` (the shifted origin on the surface) and `d0`; (0, 0) without a flow.
+std::pair<int, int> carriedAnchor(const TraceFrame& f, const SpikeParams& P, int magnet, Vec3d& anchor, Vec3d& d0)
+{
+    anchor = f.x0;
+    d0 = Vec3d::Zero();
+    const SpikeInput& in = f.fields.input();
+    if (!(P.responseTime > 0) || !in.flow) return {0, 0};
+    d0 = in.flow->carriedOffset(f.x0, f.n0, magnet, P.responseTime, in.time);
+    // d0 in lattice coordinates: d0 = (a e1 + b e2) l along the surface at x0.
+    const Vec3d e2 = f.square ? f.e1perp : Vec3d(0.5 * f.e1 + 0.8660254037844386 * f.e1perp);
+    const double b = d0.dot(f.e1perp) / (f.l * e2.dot(f.e1perp));
+    const double a = (d0.dot(f.e1) - b * f.l * e2.dot(f.e1)) / f.l;
+    const int di = int(std::lround(a)), dj = int(std::lround(b));
+    const Vec3d fraction = d0 - f.l * (di * f.e1 + dj * e2);
+    Vec3d s, n;
+    if (!dropOnSurface(f, f.x0 + fraction, s, n)) return {0, 0};
+    anchor = s;
+    return {di, dj};
+}
+
+// SpikeParams::responseTime, each tip's own part: where the flow under a tip differs from
+// the flow under the anchor (a slosh that stretches or turns the pattern), the tip moves by
+// the difference of their carried offsets, at most half a spacing (a tip never strays into
+// its neighbour's place), and is dropped onto the surface as the traced tips are. The lattice
+// maps are built afterwards from the moved tips, so the profile follows them.
+void carryTips(const TraceFrame& f, LatticeTips& lattice, const SpikeParams& P, int magnet, const Vec3d& d0)
 {
     const SpikeInput& in = f.fields.input();
     if (!(P.responseTime > 0) || !in.flow) return;
     for (Tip& tip : lattice.tips) {
-        Vec3d d = in.flow->carriedOffset(tip.position, tip.normal, magnet, P.responseTime, in.time);
-        if (d.norm() > f.l) d *= f.l / d.norm();
+        Vec3d d = in.flow->carriedOffset(tip.position, tip.normal, magnet, P.responseTime, in.time) - d0;
+        d -= d.dot(tip.normal) * tip.normal;
+        if (d.norm() > 0.5 * f.l) d *= 0.5 * f.l / d.norm();
         if (!(d.norm() > 1e-9 * f.l)) continue;
         Vec3d s, n;
         if (dropOnSurface(f, tip.position + d, s, n)) {
@@ -372,9 +403,13 @@ void traceLattice(Pattern& pat, const FreeSurface& surface, const SurfaceFields&
     const Vec3d n0 = pat.info.normal, e1 = pat.info.axis;
     const SmoothNormals normals(surface, 0.5 * l);
     const bool square = pat.info.lattice == SpikeParams::Lattice::Square;
-    const TraceFrame frame{surface, normals, fields, Mc, pat.info.origin, n0, e1, n0.cross(e1), l, P.maxTilt, square};
+    const TraceFrame foot{surface, normals, fields, Mc, pat.info.origin, n0, e1, n0.cross(e1), l, P.maxTilt, square};
+    Vec3d anchor, d0;
+    const auto [di, dj] = carriedAnchor(foot, P, pat.info.magnet, anchor, d0);
+    pat.info.origin = anchor;
+    const TraceFrame frame{surface, normals, fields, Mc, anchor, n0, e1, n0.cross(e1), l, P.maxTilt, square};
     LatticeTips lattice;
-    const int maxRings = int(std::ceil(diagonal / l)) + 1;
+    const int maxRings = int(std::ceil(diagonal / l)) + 1 + std::abs(di) + std::abs(dj);
     if (square) {
         pat.info.rings = traceSquare(frame, maxRings, lattice);
     } else {
@@ -382,8 +417,16 @@ void traceLattice(Pattern& pat, const FreeSurface& surface, const SurfaceFields&
         traceAxes(frame, maxRings, lattice, axisTips);
         pat.info.rings = fillRings(frame, axisTips, lattice);
     }
+    if (di != 0 || dj != 0) { // the tips' own coordinates: the tip traced at (i, j) is the one
+        lattice.index.clear(); // the flow carried there from site (i - di, j - dj)
+        for (size_t t = 0; t < lattice.tips.size(); ++t) {
+            lattice.tips[t].i -= di;
+            lattice.tips[t].j -= dj;
+            lattice.index[latticeKey(lattice.tips[t].i, lattice.tips[t].j)] = t;
+        }
+    }
     jitterTips(frame, lattice, P, pat.info.magnet);
-    carryTips(frame, lattice, P, pat.info.magnet);
+    carryTips(frame, lattice, P, pat.info.magnet, d0);
     for (Tip& tip : lattice.tips) tip.toLattice = tipLatticeMap(frame, lattice, tip);
     pat.tips = std::move(lattice.tips);
     // Eq. 14 at each tip: C0 = beta |H|, capped so the tip stands at most maxAspect l above

@@ -61,17 +61,25 @@ std::shared_ptr<const SurfaceFlowHistory> SurfaceFlowHistory::load(const std::st
 {
     std::vector<FlowSample> samples;
     if (!(tau > 0) || !(fps > 0) || frame < 0) return std::make_shared<SurfaceFlowHistory>(std::move(samples));
-    // Samples half a response time apart over four of them (the tail beyond weighs e^-4);
-    // between them the velocity is interpolated, which a flow slower than tau / 2 allows.
-    const int stride = std::max(1, int(std::lround(0.5 * tau * fps)));
-    const int oldest = std::max(0, frame - int(std::ceil(4.0 * tau * fps)));
-    for (int f = frame; f >= oldest; f -= stride) {
+    // Samples over four response times (the tail beyond weighs e^-4), at most 0.05 s apart
+    // (between them the velocity is interpolated: a slosh of 0.4 s period gets 8 a period) and
+    // at most kMaxSamples of them (longer response times space them wider).
+    constexpr int kMaxSamples = 64;
+    const int span = int(std::ceil(4.0 * tau * fps));
+    const int stride = std::max({1, int(std::lround(std::min(0.5 * tau, 0.05) * fps)), (span + kMaxSamples - 1) / kMaxSamples});
+    const int oldest = std::max(0, frame - span);
+    // The frame itself, then the multiples of the stride before it: consecutive frames share
+    // their samples (each its own latest), so the velocity noise of one sample grid does not
+    // alternate with another's from frame to frame and make the tips flicker.
+    std::vector<int> frames{frame};
+    for (int f = (frame / stride) * stride; f >= oldest; f -= stride)
+        if (f < frame) frames.push_back(f);
+    for (int f : frames) {
         const std::string path = framePath(pattern, f);
         if (!fileExists(path)) break;
         FlowSample s;
         if (!readSample(path, f / fps, s)) break;
         samples.push_back(std::move(s));
-        if (f - stride < oldest && f > oldest) f = oldest + stride; // end exactly on the oldest frame
     }
     return std::make_shared<SurfaceFlowHistory>(std::move(samples));
 }
@@ -112,7 +120,13 @@ Vec3d SurfaceFlowHistory::carriedOffset(const Vec3d& site, const Vec3d& n, int m
         if (magnet < 0 || size_t(magnet) >= then.size() || size_t(magnet) >= now.size() ||
             now[size_t(magnet)].kind == MagnetKind::Uniform)
             return site;
-        return site - alongSurface(now[size_t(magnet)].position - then[size_t(magnet)].position, n);
+        // The pattern hangs on the magnet's foot, where its axis meets the surface: a move
+        // along the axis (a magnet pulled straight down) leaves it where it is.
+        const Magnet& m = now[size_t(magnet)];
+        const Vec3d axis = m.direction.norm() > 0 ? Vec3d(m.direction.normalized()) : Vec3d::Zero();
+        Vec3d move = m.position - then[size_t(magnet)].position;
+        move -= move.dot(axis) * axis;
+        return site - alongSurface(move, n);
     };
     Vec3d d = Vec3d::Zero();
     for (size_t k = 0; k < count; ++k) {

@@ -34,8 +34,9 @@ struct FlowSample {
 /// The flow at a few times before (and at) a frame, oldest first.
 class SurfaceFlowHistory {
 public:
-    /// Reads the particle files of frames frame, frame - stride, ... back over 4 tau [s]
-    /// (stride = the frames in tau / 4, at least one), stopping at frame 0 or at the first
+    /// Reads the particle files of the frame and of the multiples of a stride before it, back
+    /// over 4 tau [s] (stride = the frames in min(tau / 2, 0.05 s), at least one, at most 64
+    /// files), stopping at frame 0 or at the first
     /// file that is missing; `pattern` has a {:04} / %04d placeholder, fps gives a file
     /// without a `time` header its time. Files without velocity columns (vx, vy, vz) end the
     /// history there too. Throws ParticleFileError on a malformed file.
@@ -57,7 +58,8 @@ public:
     /// only the components along the surface (normal n, unit). The site now is `site` [m];
     /// earlier it stood where the magnet `magnet` (an index into each sample's header
     /// magnets; -1, a uniform field or a sample without it: the site stands still) had moved
-    /// it from: site - (the magnet's move since then, along the surface). tau > 0 [s].
+    /// it from: site - (the magnet's move since then across its axis, along the surface: the
+    /// pattern hangs on the magnet's foot). tau > 0 [s].
     Vec3d carriedOffset(const Vec3d& site, const Vec3d& n, int magnet, double tau, double t) const;
 
 private:

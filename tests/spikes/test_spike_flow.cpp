@@ -168,8 +168,12 @@ std::map<std::pair<int, int>, SpikeTip> byIndex(const SpikeResult& r)
 TEST_CASE("ferro-spikes with response_time: a flow switched on carries every tip by u tau (1 - e^(-t/tau)), and the tips move as that offset grows",
           "[spikes][flow]")
 {
+    // Two flows: one that carries the tips a third of a spacing, one that carries them most
+    // of a spacing, so the pattern is traced from an anchor a whole cell over and its tips
+    // keep their own lattice coordinates (the one the flow took from site (i, j) is (i, j)).
+    const Vec3 fast = GENERATE(Vec3(0.02f, 0.01f, 0.0f), Vec3(0.06f, 0.02f, 0.0f));
     ferro::test::TempDir dir("spike-flow");
-    const Vec3 u(0.02f, 0.01f, 0.0f);
+    const Vec3 u = fast;
     const int last = 15, onset = 6; // the flow starts at 0.2 s; the frame is at 0.5 s
     writeFlowFrames(dir, last, onset, u);
     TriangleMesh pool = spiketest::makeFlatPool(kR, kDepth, 20);
@@ -181,14 +185,14 @@ TEST_CASE("ferro-spikes with response_time: a flow switched on carries every tip
     const SpikeResult laid = spikeFrame(flowScene(0), dir.file("pool.ply"), particles, dir.file("a.ply"), last, pattern);
     const SpikeResult carried =
         spikeFrame(flowScene(tau), dir.file("pool.ply"), particles, dir.file("b.ply"), last, pattern);
-    // The history reaches 4 tau = 12 frames back, to frame 3, samples 1.5 frames apart (every
-    // second frame): the flow at the samples 0.1 s and 0.167 s is 0, from 0.233 s on it is u;
-    // between 0.167 s and 0.233 s it ramps linearly. With the ramp's exact response, from
-    // t0 = 0.167 s (dt = 1/15 s):
+    // The history reaches 4 tau = 12 frames back, to frame 3; its samples are the frame (15)
+    // and the even frames before it (0.05 s is 1.5 frames: every second frame), 4 to 14. The
+    // flow at frame 4 (0.133 s) is 0, from frame 6 (0.2 s) on it is u; between them it ramps
+    // linearly. With the ramp's exact response, from t0 = 0.133 s (dt = 1/15 s):
     //     d(t) = u tau [(t - t0) / tau - (1 - e^(-(t - t0)/tau))] / (dt / tau) up to t0 + dt,
     //     then  d(t) = d1 e^(-(t - t1)/tau) + u tau (1 - e^(-(t - t1)/tau)).
     auto offset = [&](double t) {
-        const double t0 = 5.0 / 30, dt = 2.0 / 30, t1 = t0 + dt;
+        const double t0 = 4.0 / 30, dt = 2.0 / 30, t1 = t0 + dt;
         const double d1 = tau * ((dt / tau) - (1 - std::exp(-dt / tau))) / (dt / tau);
         return d1 * std::exp(-(t - t1) / tau) + tau * (1 - std::exp(-(t - t1) / tau));
     };
@@ -206,10 +210,11 @@ TEST_CASE("ferro-spikes with response_time: a flow switched on carries every tip
         ++matched;
     }
     REQUIRE(matched > 20);
+    if (u.x() > 0.05f) return; // the velocities below: the slower flow
     // Their velocity along the surface (the spiky mesh's at each apex) is the offset's growth
     // over the frame before: u (offset(t) - offset(t - 1/30)) * 30.
     const Vec3d expectedVelocity = along * (offset(t) - offset(t - 1.0 / 30)) * 30.0;
-    REQUIRE(expectedVelocity.norm() > 0.05 * along.norm());
+    REQUIRE(expectedVelocity.norm() > 0.03 * along.norm());
     int apexes = 0;
     for (const SpikeTip& tip : carried.tips) {
         if (tip.height < 0.9 * carried.maxHeight || !a.count({tip.i, tip.j})) continue;
