@@ -82,16 +82,9 @@ SpikeParams parseSpikeParams(const SceneDocument& doc)
     p.maxTilt = r.numberInRange("max_tilt", p.maxTilt, 0, 80);   // degrees
     p.particleField = r.boolean("particle_field", p.particleField);
     p.conserveVolume = r.boolean("conserve_volume", p.conserveVolume);
-    double lastTime = -std::numeric_limits<double>::infinity();
-    for (const TableReader& k : r.tables("keys")) {
-        if (!k.has("time"))
-            k.fail("time", "every [[spikes.keys]] needs a time");
+    for (const TableReader& k : r.keyframes("keys", "spikes.keys")) {
         SpikeKey key;
         key.time = k.nonNegative("time", 0.0);
-        if (key.time < lastTime)
-            k.fail("time", "keys must be in time order (got " + formatNumber(key.time) + " after " +
-                               formatNumber(lastTime) + ")");
-        lastTime = key.time;
         key.heightGain = heightGain(k, p.heightGain);
         key.sharpness = sharpness(k, p.sharpness);
         key.jitter = jitter(k, p.jitter);

@@ -62,6 +62,11 @@ public:
     /// A sub-table (absent = empty table) and an array of tables (absent = none).
     TableReader table(const std::string& key) const;
     std::vector<TableReader> tables(const std::string& key) const;
+    /// An array of keyframe tables (e.g. [[magnets.keys]]), like tables(), after checking that
+    /// each has a `time` >= 0 [s] and that the times never decrease; `label` names them in
+    /// the errors ("every [[label]] needs a time"). The caller reads the rest (time included)
+    /// and finish()es each.
+    std::vector<TableReader> keyframes(const std::string& key, const std::string& label) const;
     /// Raw node access for stages with richer value types (nullptr if absent).
     const toml::node* node(const std::string& key) const;
 

@@ -285,6 +285,22 @@ TableReader TableReader::table(const std::string& key) const
     return TableReader(*doc_, *t, full);
 }
 
+std::vector<TableReader> TableReader::keyframes(const std::string& key, const std::string& label) const
+{
+    std::vector<TableReader> out = tables(key);
+    double lastTime = -std::numeric_limits<double>::infinity();
+    for (const TableReader& k : out) {
+        const double time = k.nonNegative("time", 0.0);
+        if (!k.has("time"))
+            k.fail("time", "every [[" + label + "]] needs a time");
+        if (time < lastTime)
+            k.fail("time", "keys must be in time order (got " + formatNumber(time) + " after " +
+                               formatNumber(lastTime) + ")");
+        lastTime = time;
+    }
+    return out;
+}
+
 std::vector<TableReader> TableReader::tables(const std::string& key) const
 {
     std::string full = path_.empty() ? key : path_ + "." + key;

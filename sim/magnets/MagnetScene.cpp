@@ -35,16 +35,9 @@ MagnetTrack parseMagnet(const TableReader& r)
         m.radius = r.positive("radius");
     if (info.positioned)
         m.softening = r.nonNegative("softening", m.softening);
-    double lastTime = -std::numeric_limits<double>::infinity();
-    for (const TableReader& k : r.tables("keys")) {
+    for (const TableReader& k : r.keyframes("keys", "magnets.keys")) {
         MagnetKeyframe key;
         key.time = k.nonNegative("time", 0.0);
-        if (!k.has("time"))
-            k.fail("time", "every [[magnets.keys]] needs a time");
-        if (key.time < lastTime)
-            k.fail("time", "keys must be in time order (got " + formatNumber(key.time) + " after " +
-                               formatNumber(lastTime) + ")");
-        lastTime = key.time;
         key.position = info.positioned ? k.vec3("position", m.position) : m.position;
         key.direction = k.unitVector("direction", m.direction);
         key.strength = strength(k, info, m.strength);

@@ -17,7 +17,7 @@
 
 using namespace ferro;
 
-TEST_CASE("the bifurcation's upper branch solves the stationary amplitude equation and is stable; its thresholds and jump",
+TEST_CASE("the bifurcation's upper branch solves the stationary amplitude equation and is stable, with its thresholds and jump",
           "[spikes][physics][bifurcation]")
 {
     for (double s : {1.0, 0.97, 0.9, 0.75})
