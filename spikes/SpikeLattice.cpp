@@ -187,7 +187,10 @@ std::pair<int, int> carriedAnchor(const TraceFrame& f, const SpikeParams& P, int
     const int di = int(std::lround(a)), dj = int(std::lround(b));
     const Vec3d fraction = d0 - f.l * (di * f.e1 + dj * e2);
     Vec3d s, n;
-    if (!dropOnSurface(f, f.x0 + fraction, s, n)) return {0, 0};
+    if (!dropOnSurface(f, f.x0 + fraction, s, n)) { // the anchor stays: so does every tip
+        d0 = Vec3d::Zero();
+        return {0, 0};
+    }
     anchor = s;
     return {di, dj};
 }
@@ -202,7 +205,8 @@ void carryTips(const TraceFrame& f, LatticeTips& lattice, const SpikeParams& P, 
     const SpikeInput& in = f.fields.input();
     if (!(P.responseTime > 0) || !in.flow) return;
     for (Tip& tip : lattice.tips) {
-        Vec3d d = in.flow->carriedOffset(tip.position, tip.normal, magnet, P.responseTime, in.time) - d0;
+        // The tip's site in the field's lattice is where it stands less the anchor's offset.
+        Vec3d d = in.flow->carriedOffset(tip.position - d0, tip.normal, magnet, P.responseTime, in.time) - d0;
         d -= d.dot(tip.normal) * tip.normal;
         if (d.norm() > 0.5 * f.l) d *= 0.5 * f.l / d.norm();
         if (!(d.norm() > 1e-9 * f.l)) continue;
@@ -409,7 +413,7 @@ void traceLattice(Pattern& pat, const FreeSurface& surface, const SurfaceFields&
     pat.info.origin = anchor;
     const TraceFrame frame{surface, normals, fields, Mc, anchor, n0, e1, n0.cross(e1), l, P.maxTilt, square};
     LatticeTips lattice;
-    const int maxRings = int(std::ceil(diagonal / l)) + 1 + std::abs(di) + std::abs(dj);
+    const int maxRings = int(std::ceil(diagonal / l)) + 1;
     if (square) {
         pat.info.rings = traceSquare(frame, maxRings, lattice);
     } else {

@@ -103,11 +103,12 @@ std::vector<char> SurfaceFields::spikesStood(const Vec3d& x, const Vec3d& H, con
         };
         const double lawNow =
             langevinMagnetization(scale * magnetField(magnetsAt(in_.time), x).norm(), law.susceptibility, law.saturation);
-        const double step = in_.lookbackStep;
-        double t = in_.time - double(history.size() - 1) * (in_.pastMagnets.empty() ? 0.0 : step);
+        double t = in_.time - double(history.size() - 1) * (in_.pastMagnets.empty() ? 0.0 : in_.lookbackStep);
         // Back to the shot's start (the tracks hold their first keys before it: a layer that
-        // sat in the band from the start never had spikes), at most 4096 steps.
-        for (int k = 0; k < 4096 && t > 0; ++k) {
+        // sat in the band from the start never had spikes), in at most 4096 steps: a long hold
+        // in the band is looked through in coarser steps rather than cut short.
+        const double step = std::max(in_.lookbackStep, t / 4096);
+        for (int k = 0; k < 4097 && t > 0; ++k) {
             t -= step;
             const double M = pastMagnetization(x, history.front(), scale, lawNow, magnetsAt(t));
             if (M >= Mc_) { state = true; break; }

@@ -26,6 +26,7 @@ bool readSample(const std::string& path, double fallbackTime, FlowSample& s)
     if (table.column("vx") < 0 || table.column("vy") < 0 || table.column("vz") < 0) return false;
     const std::vector<Vec3> x = table.vec3("x", "y", "z"), v = table.vec3("vx", "vy", "vz");
     s.time = table.commentNumber("time", fallbackTime);
+    if (!std::isfinite(s.time)) throw ParticleFileError(path + ": its time is not a finite number");
     std::vector<Vec3d> positions;
     positions.reserve(x.size());
     s.velocity.reserve(v.size());
@@ -36,6 +37,7 @@ bool readSample(const std::string& path, double fallbackTime, FlowSample& s)
         s.velocity.push_back(v[i].cast<double>());
     }
     double spacing = table.commentNumber("spacing", 0.0);
+    if (!std::isfinite(spacing)) throw ParticleFileError(path + ": its spacing is not a finite number");
     if (!(spacing > 0) && !positions.empty()) { // no header: the mean spacing of the bounding box
         Vec3d lo = positions[0], hi = positions[0];
         for (const Vec3d& p : positions) {
@@ -47,7 +49,11 @@ bool readSample(const std::string& path, double fallbackTime, FlowSample& s)
     }
     s.radius = 2.0 * spacing;
     s.grid = std::make_unique<HashGrid>(positions, s.radius > 0 ? s.radius : 1e-3);
-    if (table.comment("magnet_count").size()) s.magnets = readMagnetComments(table);
+    try {
+        if (table.comment("magnet_count").size()) s.magnets = readMagnetComments(table);
+    } catch (const ParticleFileError& e) {
+        throw ParticleFileError(path + ": " + e.what());
+    }
     return true;
 }
 
@@ -64,9 +70,10 @@ std::shared_ptr<const SurfaceFlowHistory> SurfaceFlowHistory::load(const std::st
     // Samples over four response times (the tail beyond weighs e^-4), at most 0.05 s apart
     // (between them the velocity is interpolated: a slosh of 0.4 s period gets 8 a period) and
     // at most kMaxSamples of them (longer response times space them wider).
-    constexpr int kMaxSamples = 64;
+    constexpr int kMaxSamples = 64; // the frame itself and at most 63 before it
     const int span = int(std::ceil(4.0 * tau * fps));
-    const int stride = std::max({1, int(std::lround(std::min(0.5 * tau, 0.05) * fps)), (span + kMaxSamples - 1) / kMaxSamples});
+    const int stride = std::max({1, int(std::floor(std::min(0.5 * tau, 0.05) * fps + 1e-9)),
+                                 (span + kMaxSamples - 2) / (kMaxSamples - 1)});
     const int oldest = std::max(0, frame - span);
     // The frame itself, then the multiples of the stride before it: consecutive frames share
     // their samples (each its own latest), so the velocity noise of one sample grid does not

@@ -58,7 +58,7 @@ shot() {
       awk -F, -v name="$name" -v tau="$tau" -v frames="$first-$last" -v cpu="$seconds" -v n="$((last - first + 1))" '
         NR == 1 { for (i = 1; i <= NF; ++i) c[$i] = i; next }
         { k = $c["flow_tips"]; tips += k; su += k * $c["surface_speed_mm_s"]; sv += k * $c["tip_speed_mm_s"]
-          sd += k * $c["surface_speed_mm_s"] * $c["flow_mismatch"]; bd += $c["interior_born"] + $c["interior_died"] }
+          sd += k * $c["flow_difference_mm_s"]; bd += $c["interior_born"] + $c["interior_died"] }
         END { ms = tips ? su / tips : 0; mv = tips ? sv / tips : 0; mm = su > 0 ? sd / su : 0
               printf "%s,%s,%s,%d,%.3g,%.3g,%.3f,%d,%.3g\n", name, tau, frames, tips, ms, mv, mm, bd, cpu / n }' "$work/tips.csv"
     done
@@ -81,7 +81,7 @@ shot() {
   echo
   echo "Neither shot reaches a mismatch of 0.2: the lattice's own spacing (alpha / |H|, widening as the field"
   echo "weakens) and its tracing along field lines that move with the magnet still move the tips. Recommended:"
-  echo "0 (default) for the paper's look; 0.5-1 s for a fast magnet, where the tips stay trackable instead"
+  echo "0 (default) for the paper's look; about 1 s for a fast magnet, where the tips stay trackable instead"
   echo "of jumping more than half a spacing a frame (docs/physics/spikes.md, \"Carried by the flow\")."
 } > "$out/flow-tips.md"
 bench_note "wrote $out/flow_tips.csv and $out/flow-tips.md"

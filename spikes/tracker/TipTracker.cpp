@@ -232,7 +232,8 @@ TipFrameMatch matchTips(const std::vector<SpikeTipSample>& a, const std::vector<
     if (m.flowTips > 0) {
         m.surfaceSpeed = sumU / m.flowTips;
         m.tipSpeed = sumV / m.flowTips;
-        m.flowMismatch = sumU > 0 ? sumDiff / sumU : 0.0;
+        m.flowDifference = sumDiff / m.flowTips;
+        m.flowMismatch = sumU > 0 ? sumDiff / sumU : (sumDiff > 0 ? std::numeric_limits<double>::infinity() : 0.0);
     }
     m.stableFraction = double(stable) / double(std::max(a.size(), b.size()));
     m.interiorStableFraction = interior ? double(interiorStable) / double(interior) : 1.0;
@@ -265,15 +266,15 @@ std::string tipTrackCsv(const TipTrack& track) {
     std::ostringstream o;
     o << "frame,tips,matched,born,died,interior_born,interior_died,spacing_mm,median_move_mm,max_move_mm,"
          "stable_fraction,interior_stable_fraction,max_height_jump,largest_tip_mm,max_residual_mm,flow_tips,"
-         "surface_speed_mm_s,tip_speed_mm_s,flow_mismatch\n";
+         "surface_speed_mm_s,tip_speed_mm_s,flow_difference_mm_s,flow_mismatch\n";
     for (size_t k = 0; k < track.steps.size(); ++k) {
         const TipFrameMatch& m = track.steps[k];
         char row[384];
-        std::snprintf(row, sizeof row, "%d,%d,%d,%d,%d,%d,%d,%.4f,%.4f,%.4f,%.4f,%.4f,%.4f,%.4f,%.4f,%d,%.4f,%.4f,%.4f\n",
+        std::snprintf(row, sizeof row, "%d,%d,%d,%d,%d,%d,%d,%.4f,%.4f,%.4f,%.4f,%.4f,%.4f,%.4f,%.4f,%d,%.4f,%.4f,%.4f,%.4f\n",
                       track.first + int(k) + 1, m.tipsB, m.matched, m.born, m.died, m.interiorBorn, m.interiorDied,
                       1e3 * m.spacing, 1e3 * m.medianMove, 1e3 * m.maxMove, m.stableFraction, m.interiorStableFraction,
                       m.maxHeightJump, 1e3 * m.largestTip, 1e3 * m.maxResidual, m.flowTips, 1e3 * m.surfaceSpeed,
-                      1e3 * m.tipSpeed, m.flowMismatch);
+                      1e3 * m.tipSpeed, 1e3 * m.flowDifference, m.flowMismatch);
         o << row;
     }
     return o.str();

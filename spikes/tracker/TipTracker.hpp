@@ -67,7 +67,9 @@ struct TipFrameMatch {
     int flowTips = 0;            ///< the tips compared
     double surfaceSpeed = 0;     ///< mean |u| [m/s]
     double tipSpeed = 0;         ///< mean |v| [m/s]
-    double flowMismatch = 0;     ///< sum |v - u| / sum |u| (0 = the tips ride the flow exactly)
+    double flowDifference = 0;   ///< mean |v - u| [m/s] (sum it over steps, not the ratio below)
+    double flowMismatch = 0;     ///< sum |v - u| / sum |u| (0 = the tips ride the flow exactly;
+                                 ///< +inf when tips move on a surface that does not)
 };
 
 /// Matches b's tips to a's: pairs in order of increasing distance, each tip used once, only
@@ -107,7 +109,7 @@ TipTrack trackTips(const std::string& spikyPattern, const std::string& surfacePa
 /// The track as CSV: one row per step (frame, tips, matched, born, died, interior_born,
 /// interior_died, spacing_mm, median_move_mm, max_move_mm, stable_fraction, interior_stable_fraction,
 /// max_height_jump, largest_tip_mm, max_residual_mm, flow_tips, surface_speed_mm_s,
-/// tip_speed_mm_s, flow_mismatch). The frame interval comes from the meshes' `time` headers.
+/// tip_speed_mm_s, flow_difference_mm_s, flow_mismatch). The frame interval comes from the meshes' `time` headers.
 std::string tipTrackCsv(const TipTrack& track);
 
 } // namespace ferro

@@ -74,7 +74,7 @@ int main(int argc, char** argv) {
         int compared = 0;
         for (const TipFrameMatch& m : track.steps) {
             sumU += m.surfaceSpeed * m.flowTips;
-            sumDiff += m.flowMismatch * m.surfaceSpeed * m.flowTips;
+            sumDiff += m.flowDifference * m.flowTips;
             compared += m.flowTips;
         }
         if (compared > 0 && sumU > 0)

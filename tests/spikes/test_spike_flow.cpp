@@ -14,6 +14,7 @@
 #include <catch2/catch.hpp>
 
 #include <cmath>
+#include <fstream>
 #include <functional>
 #include <map>
 #include <sstream>
@@ -185,14 +186,14 @@ TEST_CASE("ferro-spikes with response_time: a flow switched on carries every tip
     const SpikeResult laid = spikeFrame(flowScene(0), dir.file("pool.ply"), particles, dir.file("a.ply"), last, pattern);
     const SpikeResult carried =
         spikeFrame(flowScene(tau), dir.file("pool.ply"), particles, dir.file("b.ply"), last, pattern);
-    // The history reaches 4 tau = 12 frames back, to frame 3; its samples are the frame (15)
-    // and the even frames before it (0.05 s is 1.5 frames: every second frame), 4 to 14. The
-    // flow at frame 4 (0.133 s) is 0, from frame 6 (0.2 s) on it is u; between them it ramps
-    // linearly. With the ramp's exact response, from t0 = 0.133 s (dt = 1/15 s):
+    // The history reaches 4 tau = 12 frames back, to frame 3; its samples are every frame
+    // from 3 to 15 (0.05 s is 1.5 frames: at most 0.05 s apart is every frame). The flow at
+    // frame 5 (0.167 s) is 0, from frame 6 (0.2 s) on it is u; between them it ramps
+    // linearly. With the ramp's exact response, from t0 = 0.167 s (dt = 1/30 s):
     //     d(t) = u tau [(t - t0) / tau - (1 - e^(-(t - t0)/tau))] / (dt / tau) up to t0 + dt,
     //     then  d(t) = d1 e^(-(t - t1)/tau) + u tau (1 - e^(-(t - t1)/tau)).
     auto offset = [&](double t) {
-        const double t0 = 4.0 / 30, dt = 2.0 / 30, t1 = t0 + dt;
+        const double t0 = 5.0 / 30, dt = 1.0 / 30, t1 = t0 + dt;
         const double d1 = tau * ((dt / tau) - (1 - std::exp(-dt / tau))) / (dt / tau);
         return d1 * std::exp(-(t - t1) / tau) + tau * (1 - std::exp(-(t - t1) / tau));
     };
@@ -243,4 +244,30 @@ TEST_CASE("ferro-spikes with response_time: a flow switched on carries every tip
         ++apexes;
     }
     REQUIRE(apexes > 5);
+}
+
+TEST_CASE("ferro-spikes with response_time: an unusable earlier particle file is a one-line error naming it",
+          "[spikes][flow]")
+{
+    ferro::test::TempDir dir("spike-flow-bad");
+    writeFlowFrames(dir, 3, 0, Vec3(0.01f, 0.0f, 0.0f));
+    // Frame 2's time is not a number: the history cannot be ordered.
+    ParticleTable t = readParticleFile(dir.file("particles_0002.ply"));
+    t.setComment("time", "nan");
+    writeParticleFile(dir.file("particles_0002.ply"), t);
+    TriangleMesh pool = spiketest::makeFlatPool(kR, kDepth, 12);
+    setComment(pool, "time", std::to_string(3 / 30.0));
+    writeMesh(dir.file("pool.ply"), pool);
+    const std::string pattern = dir.file("particles_{:04}.ply");
+    try {
+        spikeFrame(flowScene(0.1), dir.file("pool.ply"), framePath(pattern, 3), dir.file("out.ply"), 3, pattern);
+        FAIL("no error");
+    } catch (const SpikeInputError& e) {
+        const std::string what = e.what();
+        INFO(what);
+        REQUIRE(what.find("particles_0002.ply") != std::string::npos);
+        REQUIRE(what.find("not a finite number") != std::string::npos);
+        REQUIRE(what.find('\n') == std::string::npos);
+    }
+    REQUIRE_FALSE(std::ifstream(dir.file("out.ply")).good());
 }

@@ -184,6 +184,13 @@ TEST_CASE("matchTips compares each tip's move with the surface velocity under it
     REQUIRE(matchTips(a, moved(0.0), 0.5, 0.25, true, dt).flowMismatch == Approx(1.0).epsilon(1e-9));
     REQUIRE(matchTips(a, moved(2.0), 0.5, 0.25, true, dt).flowMismatch == Approx(1.0).epsilon(1e-9));
     REQUIRE(matchTips(a, moved(0.9), 0.5, 0.25, true, dt).flowMismatch == Approx(0.1).epsilon(1e-6));
+    REQUIRE(matchTips(a, moved(0.9), 0.5, 0.25, true, dt).flowDifference == Approx(0.1 * u.norm()).epsilon(1e-6));
+    // Tips that move on a surface that stands still do not ride it: an infinite mismatch.
+    std::vector<SpikeTipSample> stillSurface = a;
+    for (auto& s : stillSurface) s.surfaceVelocity = heave;
+    std::vector<SpikeTipSample> shifted = stillSurface;
+    for (auto& s : shifted) s.position += u * dt;
+    REQUIRE(std::isinf(matchTips(stillSurface, shifted, 0.5, 0.25, true, dt).flowMismatch));
     // Without an interval, or without velocities, nothing is compared.
     REQUIRE(matchTips(a, moved(1.0)).flowTips == 0);
     std::vector<SpikeTipSample> still = a;
