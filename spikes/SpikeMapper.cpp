@@ -116,7 +116,8 @@ bool patternOrigin(const PlacementContext& c, const Magnet& magnet, const Vec3d&
 }
 
 // The tip spacing l [m], clamped to [P.minSpacing, P.maxSpacing]: eq. 15, l = alpha / |H(x0)|
-// with |H0| [A/m] at the origin (SurfaceFields::fieldHistoryMean: over the growth time), or the tip distance of the critical wavenumber
+// with |H0| [A/m] at the origin (SurfaceFields::fieldHistoryPeak: the strongest of the growth
+// time's history), or the tip distance of the critical wavenumber
 // k = 2 pi / lambda_c (g [m/s^2]) on the planform: 2 lambda_c / sqrt3 on a hexagon, lambda_c
 // on a square.
 double tipSpacing(const SpikeInput& in, const SpikeParams& P, double g, double H0, SpikeParams::Lattice lattice)
@@ -174,7 +175,7 @@ std::vector<Pattern> placePatterns(const PlacementContext& c, double g, double M
         pat.info.field = H0.norm();
         pat.info.magnetization = M0;
         pat.info.lattice = c.P.latticeOf(int(m));
-        pat.info.spacing = tipSpacing(in, c.P, g, c.fields.fieldHistoryMean(x0, H0), pat.info.lattice);
+        pat.info.spacing = tipSpacing(in, c.P, g, c.fields.fieldHistoryPeak(x0, H0), pat.info.lattice);
         pat.info.axis = latticeAxis(n0, c.P.orientation);
         bool duplicate = false;
         for (const Pattern& other : patterns)

@@ -123,14 +123,13 @@ std::vector<char> SurfaceFields::spikesStood(const Vec3d& x, const Vec3d& H, con
     return stood;
 }
 
-double SurfaceFields::fieldHistoryMean(const Vec3d& x, const Vec3d& H) const
+double SurfaceFields::fieldHistoryPeak(const Vec3d& x, const Vec3d& H) const
 {
     if (in_.pastMagnets.size() < 2) return H.norm();
-    double past = 0;
-    for (size_t k = 0; k < in_.pastMagnets.size(); ++k)
-        past += in_.pastWeights[k] * magnetField(in_.pastMagnets[k], x).norm();
+    double peak = 0;
+    for (const std::vector<Magnet>& past : in_.pastMagnets) peak = std::max(peak, magnetField(past, x).norm());
     const double now = magnetField(in_.pastMagnets[0], x).norm();
-    return now > 0 ? H.norm() * past / now : past;
+    return now > 0 ? H.norm() * peak / now : peak;
 }
 
 double SurfaceFields::magnetization(const Vec3d& x, const Vec3d& H) const

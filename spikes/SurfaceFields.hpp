@@ -46,11 +46,13 @@ public:
     /// |M| at x now and at the input's past times (SpikeInput::pastMagnets): now first, the
     /// past ones scaled by the law at the magnets' past field there.
     std::vector<double> magnetizationHistory(const Vec3d& x, const Vec3d& H) const;
-    /// |H| [A/m] at x averaged over the history with SpikeInput::pastWeights: |H| now times the
-    /// weighted mean of the magnets' past |H| there over their |H| now (|H| itself in a still
-    /// field). The paper's spacing l = alpha / |H| takes it, so a pattern whose field falls away
-    /// sinks on the lattice it stood on instead of jumping to the widest spacing in a frame.
-    double fieldHistoryMean(const Vec3d& x, const Vec3d& H) const;
+    /// The strongest |H| [A/m] at x over the history (SpikeInput::pastMagnets): |H| now times
+    /// the magnets' largest past |H| there over their |H| now (|H| itself in a still or a
+    /// growing field). The paper's spacing l = alpha / |H| takes it: a pattern crowds as its
+    /// field grows, as in the paper, but when the field falls away it sinks on the lattice
+    /// it stood on instead of jumping to the widest spacing in a frame, and widens only as
+    /// the strong past leaves the history (4 growth times).
+    double fieldHistoryPeak(const Vec3d& x, const Vec3d& H) const;
     /// The largest |M| of the history: where spikes stand, grow or still fade out (the
     /// mapping area, the pattern, the lattice's extent). currentMagnetization in a still field.
     double magnetization(const Vec3d& x, const Vec3d& H) const;

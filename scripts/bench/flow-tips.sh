@@ -79,9 +79,9 @@ shot() {
   echo
   echo "ferro-spikes CPU seconds a frame: $(awk -F, 'NR > 1 { printf "%s%s %s: %s s", sep, $1, $2, $9; sep = "; " }' "$out/flow_tips.csv")."
   echo
-  echo "Neither shot reaches a mismatch of 0.2: the lattice's own spacing (alpha / |H|, widening as the field"
-  echo "weakens) and its tracing along field lines that move with the magnet still move the tips. Recommended:"
-  echo "0 (default) for the paper's look; about 1 s for a fast magnet, where the tips stay trackable instead"
-  echo "of jumping more than half a spacing a frame (docs/physics/spikes.md, \"Carried by the flow\")."
+  echo "Neither shot reaches a mismatch of 0.2: the lattice's own motion (traced along a heap that flattens,"
+  echo "along field lines that move with the magnet) still moves the tips, and the carry adds interior births"
+  echo "and deaths. Recommended: 0 (default) for the paper's look; 1-2 s for a fast magnet whose spikes should"
+  echo "lag behind it (docs/physics/spikes.md, \"Carried by the flow\")."
 } > "$out/flow-tips.md"
 bench_note "wrote $out/flow_tips.csv and $out/flow-tips.md"

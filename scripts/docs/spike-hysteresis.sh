@@ -2,7 +2,7 @@
 # spike-hysteresis.sh: the pictures of docs/look-guide.md, "Spikes that persist as the field
 # falls": a dish (10,240 particles) over a strong magnet that is lowered slowly from 2 cm to 5 cm
 # under the floor between 1.0 s and 2.5 s, made with spikes.height_curve = "fade" (the default)
-# and "bifurcation" (lower_threshold 0.85), frames 30-75, and the frames' tip counts.
+# and "bifurcation" (lower_threshold 0.85), frames 36-63, and the frames' tip counts.
 #
 #   scripts/docs/spike-hysteresis.sh [WORK_DIR]   # default /tmp/ferro-spike-hysteresis
 #
@@ -16,7 +16,7 @@ root="$(cd "$(dirname "$0")/../.." && pwd)"
 [[ $# -le 1 ]] || { echo "usage: scripts/docs/spike-hysteresis.sh [WORK_DIR]" >&2; exit 2; }
 work="${1:-/tmp/ferro-spike-hysteresis}"
 media="$root/docs/media/look"
-frames="${FRAMES:-45 48}"
+frames="${FRAMES:-45 51}"
 mkdir -p "$work" "$media"
 scene="$work/lowered.toml"
 cat > "$scene" <<'TOML'
@@ -61,7 +61,7 @@ TOML
 
 common=(--set render.width=480 --set render.height=360
         --set render.antialias=true --set 'render.camera_position=[0.0,-0.09,0.06]'
-        --set 'render.camera_target=[0.0,0.0,0.01]' --max-frames 75 --frames 30:75 -j 2 --no-video)
+        --set 'render.camera_target=[0.0,0.0,0.01]' --max-frames 75 --frames 36:63 -j 2 --no-video)
 run() { "$root/scripts/shot.sh" "$scene" "$1" "${common[@]}" "${@:2}" 2> "$1.log" ||
           { tail -3 "$1.log" >&2; exit 3; }; }
 
@@ -73,7 +73,7 @@ echo "spike-hysteresis.sh: bifurcation (lower_threshold 0.85)" >&2
 run "$work/bifurcation" --set spikes.height_curve=bifurcation --set spikes.lower_threshold=0.85
 tips() { head -c 4000 "$1" | strings | sed -n 's/^comment spike_tips //p'; }
 echo "frame fade_tips bifurcation_tips"
-for f in $(seq 30 3 75); do
+for f in $(seq 36 3 63); do
   tag=$(printf '%04d' "$f")
   echo "$f $(tips "$work/fade/spiky/spiky_$tag.ply") $(tips "$work/bifurcation/spiky/spiky_$tag.ply")"
 done
