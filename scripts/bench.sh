@@ -159,7 +159,13 @@ INTRO
     else echo "## ${a^}"; echo; echo "Not measured in this run (scripts/bench/$a.sh missing, skipped or failed)."; echo; fi
   done
   echo "---"
-  echo "Run on $(date -u +%Y-%m-%d) at commit $(git -C "$root" rev-parse --short HEAD 2>/dev/null || echo unknown), $(nproc) cores (shared)."
+  if [[ $assemble == 1 ]]; then
+    # Only the page was rewritten: each section is from its area's last run (the sections
+    # that name a commit say which), not from this commit.
+    echo "Assembled on $(date -u +%Y-%m-%d) at commit $(git -C "$root" rev-parse --short HEAD 2>/dev/null || echo unknown) from the sections in this directory, each from its area's last run; $(nproc) cores (shared)."
+  else
+    echo "Run on $(date -u +%Y-%m-%d) at commit $(git -C "$root" rev-parse --short HEAD 2>/dev/null || echo unknown), $(nproc) cores (shared)."
+  fi
 } > "$out/README.md.tmp"
 mv -f "$out/README.md.tmp" "$out/README.md"
 echo "bench.sh: report in $out/README.md ($((SECONDS - start)) s)" >&2
