@@ -6,7 +6,6 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
-#include <cstdlib>
 #include <sstream>
 #include <cstdint>
 #include <limits>
@@ -250,9 +249,9 @@ TipTrack trackTips(const std::string& spikyPattern, const std::string& surfacePa
         const TriangleMesh spiky = readMesh(framePath(spikyPattern, f));
         const TriangleMesh surface = readMesh(framePath(surfacePattern, f));
         track.tips.push_back(findTips(spiky, surface, params));
-        double time = std::nan("");
-        for (const auto& [key, value] : surface.comments)
-            if (key == "time") time = std::strtod(value.c_str(), nullptr);
+        ParticleTable header; // the mesh's `comment key value` lines, read as particle files' are
+        header.comments = surface.comments;
+        const double time = header.commentNumber("time", std::nan(""));
         const double interval = time - lastTime; // NaN without both times: no flow statistics
         lastTime = time;
         if (track.tips.size() >= 2)

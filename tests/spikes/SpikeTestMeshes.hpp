@@ -6,8 +6,25 @@
 
 #include <cmath>
 #include <functional>
+#include <sstream>
+#include <string>
 
 namespace ferro::spiketest {
+
+/// The scene text of the spike tests' dish: radius R [m], 3 cm deep, a 1 cm layer of oil-based
+/// ferrofluid (rest density 1200, chi0 1.5, Ms 35 kA/m, sigma 0.025 N/m), then `extra` TOML
+/// (the magnets, [spikes], ...).
+inline std::string dishScene(double R, const std::string& extra)
+{
+    std::ostringstream s;
+    s << "[fluid]\nrest_density = 1200.0\nviscosity = 5e-6\nsurface_tension = 0.025\n"
+      << "[[fluid.block]]\nshape = \"cylinder\"\ncenter = [0.0, 0.0, 0.0]\nradius = " << 0.99 * R
+      << "\nheight = 0.01\ncount = 2000\n"
+      << "[container]\ntype = \"dish\"\ncenter = [0.0, 0.0, 0.0]\nradius = " << R << "\nheight = 0.03\n"
+      << "[magnetization]\nsusceptibility = 1.5\nsaturation = 35000.0\n"
+      << extra;
+    return s.str();
+}
 
 /// A closed cylinder of fluid ("a dish's pool"): floor at z = 0, axis +z through `center`,
 /// radius R, top at z = height(r, angle). Top and floor are concentric rings ring_k of 6k

@@ -8,6 +8,7 @@
 #include "spikes/SpikeFrames.hpp"
 #include "spikes/SpikeLattice.hpp"
 #include "spikes/SpikePhysics.hpp"
+#include "tests/TestUtil.hpp"
 
 #include <catch2/catch.hpp>
 
@@ -54,41 +55,23 @@ constexpr double kR = 0.03, kDepth = 0.01;
 SpikeScene sweepScene(double Hc, const std::string& spikes)
 {
     std::ostringstream s;
-    s << "[fluid]\nrest_density = 1200.0\nviscosity = 5e-6\nsurface_tension = 0.025\n"
-      << "[[fluid.block]]\nshape = \"cylinder\"\ncenter = [0.0, 0.0, 0.0]\nradius = " << 0.99 * kR
-      << "\nheight = 0.01\ncount = 2000\n"
-      << "[container]\ntype = \"dish\"\ncenter = [0.0, 0.0, 0.0]\nradius = " << kR << "\nheight = 0.03\n"
-      << "[magnetization]\nsusceptibility = 1.5\nsaturation = 35000.0\n"
-      << "[[magnets]]\nkind = \"uniform\"\ndirection = [0.0, 0.0, 1.0]\nfield = " << 0.8 * Hc << "\n"
+    s << "[[magnets]]\nkind = \"uniform\"\ndirection = [0.0, 0.0, 1.0]\nfield = " << 0.8 * Hc << "\n"
       << "[[magnets.keys]]\ntime = 0.0\nfield = " << 0.8 * Hc << "\n"
       << "[[magnets.keys]]\ntime = 1.0\nfield = " << 1.3 * Hc << "\n"
       << "[[magnets.keys]]\ntime = 2.0\nfield = " << 0.8 * Hc << "\n"
       << "[spikes]\nalpha = 30.0\ngrowth_time = 0.001\n" << spikes;
-    return parseSpikeScene(SceneDocument::parse(s.str(), "sweep.toml"));
+    return parseSpikeScene(SceneDocument::parse(spiketest::dishScene(kR, s.str()), "sweep.toml"));
 }
 
-// The frame at time t through loadSpikeInput's path (magnets and their past from the tracks).
+// ferro-spikes' frame at time t (the flat pool's `time` header), through the files as the
+// stage reads them: the magnets and their past from the scene's tracks.
 SpikeResult sweepFrame(const SpikeScene& sc, double t)
 {
-    SpikeInput in;
-    in.surface = spiketest::makeFlatPool(kR, kDepth, 16);
-    in.fluid = sc.fluid;
-    in.time = t;
-    for (const MagnetTrack& track : sc.magnets) in.magnets.push_back(track.at(t));
-    // As SpikeFrames' addMagnetHistory: 16 quarter growth times back, exponential weights.
-    const double tau = sc.params.growthTime, step = tau / 4;
-    double total = 0;
-    for (int k = 0; k <= 16; ++k) {
-        in.pastWeights.push_back(std::exp(-k * step / tau));
-        total += in.pastWeights.back();
-        std::vector<Magnet> past;
-        for (const MagnetTrack& track : sc.magnets) past.push_back(track.at(t - k * step));
-        in.pastMagnets.push_back(past);
-    }
-    for (double& w : in.pastWeights) w /= total;
-    in.tracks = std::make_shared<const std::vector<MagnetTrack>>(sc.magnets);
-    in.lookbackStep = step;
-    return addSpikes(in, sc.params);
+    static const ferro::test::TempDir dir("spike-sweep");
+    TriangleMesh pool = spiketest::makeFlatPool(kR, kDepth, 16);
+    setComment(pool, "time", formatNumber(t));
+    writeMesh(dir.file("pool.ply"), pool);
+    return spikeFrame(sc, dir.file("pool.ply"), "", dir.file("spiky.ply"));
 }
 
 // The field H [A/m] at which the fluid's law gives |M| = M.

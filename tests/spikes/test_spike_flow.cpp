@@ -126,14 +126,9 @@ constexpr double kR = 0.03, kDepth = 0.01;
 SpikeScene flowScene(double responseTime)
 {
     std::ostringstream s;
-    s << "[fluid]\nrest_density = 1200.0\nviscosity = 5e-6\nsurface_tension = 0.025\n"
-      << "[[fluid.block]]\nshape = \"cylinder\"\ncenter = [0.0, 0.0, 0.0]\nradius = " << 0.99 * kR
-      << "\nheight = 0.01\ncount = 2000\n"
-      << "[container]\ntype = \"dish\"\ncenter = [0.0, 0.0, 0.0]\nradius = " << kR << "\nheight = 0.03\n"
-      << "[magnetization]\nsusceptibility = 1.5\nsaturation = 35000.0\n"
-      << "[[magnets]]\nkind = \"uniform\"\ndirection = [0.0, 0.0, 1.0]\nfield = 15000.0\n"
+    s << "[[magnets]]\nkind = \"uniform\"\ndirection = [0.0, 0.0, 1.0]\nfield = 15000.0\n"
       << "[spikes]\nalpha = 100.0\nresponse_time = " << responseTime << "\n";
-    return parseSpikeScene(SceneDocument::parse(s.str(), "flow.toml"));
+    return parseSpikeScene(SceneDocument::parse(spiketest::dishScene(kR, s.str()), "flow.toml"));
 }
 
 // Particle files frames 0..last at 30 fps: the dish's particles (2 mm grid), from frame

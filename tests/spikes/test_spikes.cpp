@@ -22,24 +22,12 @@
 #include <sstream>
 
 using namespace ferro;
+using spiketest::dishScene;
 using spiketest::makeFlatPool;
 
 namespace {
 
 constexpr double kDepth = 0.01;
-
-// A dish of radius R holding oil-based ferrofluid (chi0 1.5, Ms 35 kA/m), plus `extra` TOML.
-std::string sceneText(double R, const std::string& extra)
-{
-    std::ostringstream s;
-    s << "[fluid]\nrest_density = 1200.0\nviscosity = 5e-6\nsurface_tension = 0.025\n"
-      << "[[fluid.block]]\nshape = \"cylinder\"\ncenter = [0.0, 0.0, 0.0]\nradius = " << 0.99 * R
-      << "\nheight = 0.01\ncount = 2000\n"
-      << "[container]\ntype = \"dish\"\ncenter = [0.0, 0.0, 0.0]\nradius = " << R << "\nheight = 0.03\n"
-      << "[magnetization]\nsusceptibility = 1.5\nsaturation = 35000.0\n"
-      << extra;
-    return s.str();
-}
 
 // Two upright dipoles of `moment` [A m^2] at (x1, 0, z1) and (x2, 0, z2) [m].
 std::string dipolePair(double x1, double z1, double x2, double z2, double moment)
@@ -196,22 +184,22 @@ TEST_CASE("[spikes] section: defaults, overrides and unknown keys", "[spikes][sc
 {
     const double R = 0.03;
     SpikeScene sc = parseSpikeScene(SceneDocument::parse(
-        sceneText(R, uniformField(15000) + "[spikes]\nalpha = 80.0\nspacing = \"physical\"\n"), "test.toml",
+        dishScene(R, uniformField(15000) + "[spikes]\nalpha = 80.0\nspacing = \"physical\"\n"), "test.toml",
         {"spikes.beta=2e-7"}));
     REQUIRE(sc.params.alpha == 80.0);
     REQUIRE(sc.params.beta == 2e-7);
     REQUIRE(sc.params.spacing == SpikeParams::Spacing::Physical);
     REQUIRE(sc.fluid.hasCenter);
-    REQUIRE_THROWS_AS(scene(sceneText(R, "[spikes]\nalpah = 80.0\n")), SceneError);
-    REQUIRE_THROWS_AS(scene(sceneText(R, "[spikes]\nsharpness = 0.5\n")), SceneError);
-    REQUIRE_THROWS_AS(scene(sceneText(R, "[spikes]\nspacing = \"wide\"\n")), SceneError);
+    REQUIRE_THROWS_AS(scene(dishScene(R, "[spikes]\nalpah = 80.0\n")), SceneError);
+    REQUIRE_THROWS_AS(scene(dishScene(R, "[spikes]\nsharpness = 0.5\n")), SceneError);
+    REQUIRE_THROWS_AS(scene(dishScene(R, "[spikes]\nspacing = \"wide\"\n")), SceneError);
 }
 
 TEST_CASE("flat pool in a vertical field: hexagonal tips at the analytic spacing, along the field",
           "[spikes][pool]")
 {
     const double R = 0.03, H0 = 15000;
-    const SpikeScene sc = scene(sceneText(R, uniformField(H0)));
+    const SpikeScene sc = scene(dishScene(R, uniformField(H0)));
     const SpikeResult res = addSpikes(frameInput(sc, makeFlatPool(R, kDepth, 20)), sc.params);
     REQUIRE(res.patterns.size() == 1);
     const SpikePattern& pat = res.patterns[0];
@@ -272,7 +260,7 @@ TEST_CASE("spacing shrinks and spikes grow as the field grows, and none below M_
     const double R = 0.03;
     const TriangleMesh pool = makeFlatPool(R, kDepth, 20);
     auto run = [&](double H) {
-        const SpikeScene sc = scene(sceneText(R, uniformField(H)));
+        const SpikeScene sc = scene(dishScene(R, uniformField(H)));
         return addSpikes(frameInput(sc, pool), sc.params);
     };
     const SpikeResult weak = run(12000), strong = run(18000);
@@ -284,7 +272,7 @@ TEST_CASE("spacing shrinks and spikes grow as the field grows, and none below M_
     REQUIRE(strong.tips.size() > weak.tips.size());
 
     // M_c: the field whose magnetization (this fluid's law, no particles) is M_c.
-    const SpikeScene sc = scene(sceneText(R, uniformField(1000)));
+    const SpikeScene sc = scene(dishScene(R, uniformField(1000)));
     const CriticalMagnetization c =
         criticalMagnetization(1200 - sc.params.ambientDensity, 9.81, 0.025, sc.fluid.law);
     const SpikeResult below = run(0.97 * c.internalField);
@@ -299,7 +287,7 @@ TEST_CASE("spacing shrinks and spikes grow as the field grows, and none below M_
 TEST_CASE("physical spacing: the critical wavelength", "[spikes][pool]")
 {
     const double R = 0.03;
-    const SpikeScene sc = scene(sceneText(R, uniformField(15000) + "[spikes]\nspacing = \"physical\"\n"));
+    const SpikeScene sc = scene(dishScene(R, uniformField(15000) + "[spikes]\nspacing = \"physical\"\n"));
     const SpikeResult res = addSpikes(frameInput(sc, makeFlatPool(R, kDepth, 20)), sc.params);
     REQUIRE(res.patterns.size() == 1);
     const double lambda = criticalWavelength(1200 - sc.params.ambientDensity, 9.81, 0.025);
@@ -314,7 +302,7 @@ TEST_CASE("physical spacing: the critical wavelength", "[spikes][pool]")
 TEST_CASE("temporal stability: a still magnet keeps the tips in place", "[spikes][stability]")
 {
     const double R = 0.03;
-    const SpikeScene sc = scene(sceneText(R, uniformField(15000)));
+    const SpikeScene sc = scene(dishScene(R, uniformField(15000)));
     const TriangleMesh frame1 = makeFlatPool(R, kDepth, 20);
     // Frame 2: the same pool with the small surface noise of a settled SPH surface (20 um).
     TriangleMesh frame2 = frame1;
@@ -340,7 +328,7 @@ TEST_CASE("two magnets: each makes a pattern, tips lean along the field lines", 
 {
     const double R = 0.045;
     const std::string magnets = dipolePair(-0.02, -0.02, 0.025, -0.025, 1.5);
-    const SpikeScene sc = scene(sceneText(R, magnets), {"spikes.resolution=24"});
+    const SpikeScene sc = scene(dishScene(R, magnets), {"spikes.resolution=24"});
     const SpikeResult res = addSpikes(frameInput(sc, makeFlatPool(R, kDepth, 30)), sc.params);
     REQUIRE(res.patterns.size() == 2);
     REQUIRE(res.patterns[0].origin.x() == Approx(-0.02).margin(1e-6));
@@ -382,7 +370,7 @@ TEST_CASE("two magnets brought together: the patterns meet without overlapping o
 {
     const double R = 0.045;
     const std::string magnets = dipolePair(-0.012, -0.02, 0.012, -0.02, 1.5);
-    const SpikeScene sc = scene(sceneText(R, magnets), {"spikes.resolution=24"});
+    const SpikeScene sc = scene(dishScene(R, magnets), {"spikes.resolution=24"});
     const SpikeResult res = addSpikes(frameInput(sc, makeFlatPool(R, kDepth, 30)), sc.params);
     REQUIRE(res.patterns.size() == 2);
     const double l = std::max(res.patterns[0].spacing, res.patterns[1].spacing);
@@ -424,7 +412,7 @@ TEST_CASE("spikes grow over spikes.growth_time after the field jumps on, and equ
 {
     const double R = 0.03;
     // A uniform field off until t = 1 s, then 15 kA/m (1.4x critical) in a millisecond.
-    const std::string text = sceneText(R, uniformField(15000) +
+    const std::string text = dishScene(R, uniformField(15000) +
                                               "[[magnets.keys]]\ntime = 0.0\nfield = 0.0\n"
                                               "[[magnets.keys]]\ntime = 1.0\nfield = 0.0\n"
                                               "[[magnets.keys]]\ntime = 1.001\nfield = 15000.0\n");
@@ -455,7 +443,7 @@ TEST_CASE("the spikes' own velocity is the rate of their displacement: a field r
     // field, every spike at full fade: each spike's height is beta |H| times a fixed profile,
     // so d(displacement)/dt = displacement * (dH/dt) / H, the backward difference over a frame
     // exactly so on a line.
-    const std::string text = sceneText(R, uniformField(12000) +
+    const std::string text = dishScene(R, uniformField(12000) +
                                               "[[magnets.keys]]\ntime = 0.0\nfield = 12000.0\n"
                                               "[[magnets.keys]]\ntime = 1.0\nfield = 16000.0\n"
                                               "[[magnets.keys]]\ntime = 2.0\nfield = 20000.0\n"
@@ -489,7 +477,7 @@ TEST_CASE("spikes in a still field stand where the field lays them out while the
     // in place whatever the fluid does, so along the surface a spike's velocity is its own
     // (none), while the surface off the spikes keeps the fluid's velocity exactly.
     const double R = 0.03;
-    const SpikeScene sc = scene(sceneText(R, uniformField(15000)));
+    const SpikeScene sc = scene(dishScene(R, uniformField(15000)));
     ferro::test::TempDir dir("spike-still");
     const Vec3 drift(0.01f, -0.002f, 0.0f);   // the fluid's surface sliding sideways [m/s]
     const SpikeResult res = poolFrame(sc, dir, R, 1.0, drift);
@@ -536,7 +524,7 @@ constexpr double kLookR = 0.03, kLookH = 15000;
 SpikeResult lookFrame(const std::string& spikes, double time = 0.0, double lift = 0.0,
                       const std::vector<std::string>& overrides = {})
 {
-    const SpikeScene sc = scene(sceneText(kLookR, uniformField(kLookH) + "[spikes]\n" + spikes), overrides);
+    const SpikeScene sc = scene(dishScene(kLookR, uniformField(kLookH) + "[spikes]\n" + spikes), overrides);
     return addSpikes(frameInput(sc, makeFlatPool(kLookR, kDepth + lift, 20), time), sc.params);
 }
 
@@ -655,7 +643,7 @@ TEST_CASE("[[spikes.keys]] animate the look: the keys' values at their times, mo
     const std::string keys = "[[spikes.keys]]\ntime = 0.0\n"
                              "[[spikes.keys]]\ntime = 1.0\nheight_gain = 2.0\nsharpness = 3.0\n"
                              "[[spikes.keys]]\ntime = 2.0\nheight_gain = 2.0\nsharpness = 1.5\n";
-    const SpikeScene sc = scene(sceneText(kLookR, uniformField(kLookH) + "[spikes]\n" + keys));
+    const SpikeScene sc = scene(dishScene(kLookR, uniformField(kLookH) + "[spikes]\n" + keys));
     REQUIRE(sc.params.keys.size() == 3);
     // A key that leaves a value out holds the section's value (gain 1, sharpness 1).
     REQUIRE(spikeParamsAt(sc.params, -1.0).heightGain == 1.0);
@@ -684,11 +672,11 @@ TEST_CASE("[[spikes.keys]] animate the look: the keys' values at their times, mo
     REQUIRE(animated.size() == base.size());
     for (const auto& [ij, tip] : base) REQUIRE(animated.at(ij).height == Approx(gain * tip.height).epsilon(1e-9));
     // Bad keys: out of order, no time, a value out of range.
-    REQUIRE_THROWS_AS(scene(sceneText(kLookR, "[spikes]\n[[spikes.keys]]\ntime = 1.0\n[[spikes.keys]]\ntime = 0.5\n")),
+    REQUIRE_THROWS_AS(scene(dishScene(kLookR, "[spikes]\n[[spikes.keys]]\ntime = 1.0\n[[spikes.keys]]\ntime = 0.5\n")),
                       SceneError);
-    REQUIRE_THROWS_AS(scene(sceneText(kLookR, "[spikes]\n[[spikes.keys]]\nheight_gain = 2.0\n")), SceneError);
-    REQUIRE_THROWS_AS(scene(sceneText(kLookR, "[spikes]\n[[spikes.keys]]\ntime = 0.0\njitter = 0.5\n")), SceneError);
-    REQUIRE_THROWS_AS(scene(sceneText(kLookR, "[spikes]\n[[spikes.keys]]\ntime = 0.0\nspacing = 2.0\n")), SceneError);
+    REQUIRE_THROWS_AS(scene(dishScene(kLookR, "[spikes]\n[[spikes.keys]]\nheight_gain = 2.0\n")), SceneError);
+    REQUIRE_THROWS_AS(scene(dishScene(kLookR, "[spikes]\n[[spikes.keys]]\ntime = 0.0\njitter = 0.5\n")), SceneError);
+    REQUIRE_THROWS_AS(scene(dishScene(kLookR, "[spikes]\n[[spikes.keys]]\ntime = 0.0\nspacing = 2.0\n")), SceneError);
 }
 
 TEST_CASE("the square planform: tips 3, cell centres -1.5, saddles -0.25, mean zero", "[spikes][physics]")
@@ -762,7 +750,7 @@ TEST_CASE("[[spikes.magnets]] gives one magnet its own planform and the other ke
     const double R = 0.045;
     const std::string magnets = dipolePair(-0.02, -0.02, 0.025, -0.025, 1.5);
     const SpikeScene sc =
-        scene(sceneText(R, magnets + "[spikes]\n[[spikes.magnets]]\nmagnet = 0\npattern = \"square\"\n"));
+        scene(dishScene(R, magnets + "[spikes]\n[[spikes.magnets]]\nmagnet = 0\npattern = \"square\"\n"));
     const SpikeResult res = addSpikes(frameInput(sc, makeFlatPool(R, kDepth, 30)), sc.params);
     REQUIRE(res.patterns.size() == 2);
     for (const SpikePattern& p : res.patterns)
@@ -777,11 +765,11 @@ TEST_CASE("[[spikes.magnets]] gives one magnet its own planform and the other ke
     }
     REQUIRE(ring == 4);
     requireHealthy(res);
-    REQUIRE_THROWS_AS(scene(sceneText(R, magnets + "[spikes]\n[[spikes.magnets]]\nmagnet = 2\npattern = \"square\"\n")),
+    REQUIRE_THROWS_AS(scene(dishScene(R, magnets + "[spikes]\n[[spikes.magnets]]\nmagnet = 2\npattern = \"square\"\n")),
                       SceneError);
-    REQUIRE_THROWS_AS(scene(sceneText(R, magnets + "[spikes]\n[[spikes.magnets]]\npattern = \"square\"\n")),
+    REQUIRE_THROWS_AS(scene(dishScene(R, magnets + "[spikes]\n[[spikes.magnets]]\npattern = \"square\"\n")),
                       SceneError);
-    REQUIRE_THROWS_AS(scene(sceneText(R, magnets + "[spikes]\n[[spikes.magnets]]\nmagnet = 0\npattern = \"squares\"\n")),
+    REQUIRE_THROWS_AS(scene(dishScene(R, magnets + "[spikes]\n[[spikes.magnets]]\nmagnet = 0\npattern = \"squares\"\n")),
                       SceneError);
 }
 
@@ -791,7 +779,7 @@ TEST_CASE("a keyed height_gain grows the spikes under a still field, and their v
     // A still uniform field and height_gain keyed 1, 2, 3 at 0, 1, 2 s (collinear: the monotone
     // curve is the line): each vertex's displacement is gain times a fixed one (the volume
     // offset scales with it too), so its velocity is displacement * (dgain/dt) / gain.
-    const std::string text = sceneText(kLookR, uniformField(kLookH) + "[shot]\nfps = 30\n[spikes]\n"
+    const std::string text = dishScene(kLookR, uniformField(kLookH) + "[shot]\nfps = 30\n[spikes]\n"
                                                "[[spikes.keys]]\ntime = 0.0\nheight_gain = 1.0\n"
                                                "[[spikes.keys]]\ntime = 1.0\nheight_gain = 2.0\n"
                                                "[[spikes.keys]]\ntime = 2.0\nheight_gain = 3.0\n");
