@@ -24,6 +24,7 @@
 #include <functional>
 #include <memory>
 #include <iostream>
+#include <map>
 #include <mutex>
 #include <sstream>
 
@@ -293,11 +294,53 @@ bool earlierSpikeInput(const SpikeScene& scene, const SpikeInput& in, double int
     return true;
 }
 
+namespace {
+
+// SpikeInput::pastParticles from the particle files of `pattern`: the file of the frame
+// nearest a time, read once (positions only); null where the file does not exist (before the
+// shot, a range simulated only in part). A file that exists but cannot be read is an error.
+std::function<std::shared_ptr<const std::vector<Vec3d>>(double)> pastParticleReader(const std::string& pattern,
+                                                                                  double fps)
+{
+    using Positions = std::shared_ptr<const std::vector<Vec3d>>;
+    auto cache = std::make_shared<std::map<int, Positions>>();
+    auto lock = std::make_shared<std::mutex>();
+    return [pattern, fps, cache, lock](double time) -> Positions {
+        if (!(fps > 0) || !std::isfinite(time)) return nullptr;
+        const int frame = std::max(0, int(std::lround(time * fps)));
+        std::lock_guard<std::mutex> guard(*lock);
+        const auto found = cache->find(frame);
+        if (found != cache->end()) return found->second;
+        Positions result;
+        const std::string path = framePath(pattern, frame);
+        if (std::ifstream(path).good()) {
+            try {
+                const std::vector<Vec3> x = readParticleFile(path).vec3("x", "y", "z");
+                auto positions = std::make_shared<std::vector<Vec3d>>();
+                positions->reserve(x.size());
+                for (size_t i = 0; i < x.size(); ++i) {
+                    if (!x[i].allFinite())
+                        throw ParticleFileError(path + ": particle " + std::to_string(i) + " has a non-finite position");
+                    positions->push_back(x[i].cast<double>());
+                }
+                result = std::move(positions);
+            } catch (const ParticleFileError& e) {
+                throw SpikeInputError(e.what());
+            }
+        }
+        (*cache)[frame] = result;
+        return result;
+    };
+}
+
+} // namespace
+
 SpikeResult spikeFrame(const SpikeScene& scene, const std::string& surfacePath, const std::string& particlePath,
                        const std::string& outPath, int frameHint, const std::string& historyPattern)
 {
     refuseToOverwriteInputs("--out", outPath, {surfacePath, particlePath});
     SpikeInput in = loadSpikeInput(scene, surfacePath, particlePath, frameHint);
+    if (!historyPattern.empty()) in.pastParticles = pastParticleReader(historyPattern, scene.fps);
     if (scene.params.responseTime > 0 && !historyPattern.empty()) {
         // The frame's number: the range's, else the frame's time (header) at the shot's rate.
         const int frame = frameHint >= 0 ? frameHint : int(std::lround(in.time * scene.fps));

@@ -7,6 +7,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <functional>
 #include <unordered_map>
 
 namespace ferro {
@@ -163,6 +164,13 @@ void jitterTips(const TraceFrame& f, LatticeTips& lattice, const SpikeParams& P,
     }
 }
 
+// The field's hold on a carried tip at the fluid's |M| (SurfaceFields::holdCurve).
+std::function<double(double)> fieldHold(const TraceFrame& f)
+{
+    const SurfaceFields* fields = &f.fields;
+    return [fields](double M) { return fields->holdCurve(M); };
+}
+
 // SpikeParams::responseTime, the pattern's part: its anchor rides the fluid's flow and relaxes
 // towards the magnet's foot x0 (SurfaceFlowHistory::carriedOffset, d0 from x0, no bound). A
 // lattice shifted by whole lattice vectors is the same lattice, so the pattern is traced from
@@ -179,7 +187,7 @@ std::pair<int, int> carriedAnchor(const TraceFrame& f, const SpikeParams& P, int
     d0 = Vec3d::Zero();
     const SpikeInput& in = f.fields.input();
     if (!(P.responseTime > 0) || !in.flow) return {0, 0};
-    d0 = in.flow->carriedOffset(f.x0, f.n0, magnet, P.responseTime, in.time);
+    d0 = in.flow->carriedOffset(f.x0, f.n0, magnet, P.responseTime, in.time, fieldHold(f));
     // d0 in lattice coordinates: d0 = (a e1 + b e2) l along the surface at x0.
     const Vec3d e2 = f.square ? f.e1perp : Vec3d(0.5 * f.e1 + 0.8660254037844386 * f.e1perp);
     const double b = d0.dot(f.e1perp) / (f.l * e2.dot(f.e1perp));
@@ -204,9 +212,10 @@ void carryTips(const TraceFrame& f, LatticeTips& lattice, const SpikeParams& P, 
 {
     const SpikeInput& in = f.fields.input();
     if (!(P.responseTime > 0) || !in.flow) return;
+    const std::function<double(double)> hold = fieldHold(f);
     for (Tip& tip : lattice.tips) {
         // The tip's site in the field's lattice is where it stands less the anchor's offset.
-        Vec3d d = in.flow->carriedOffset(tip.position - d0, tip.normal, magnet, P.responseTime, in.time) - d0;
+        Vec3d d = in.flow->carriedOffset(tip.position - d0, tip.normal, magnet, P.responseTime, in.time, hold) - d0;
         d -= d.dot(tip.normal) * tip.normal;
         if (d.norm() > 0.5 * f.l) d *= 0.5 * f.l / d.norm();
         if (!(d.norm() > 1e-9 * f.l)) continue;

@@ -175,7 +175,7 @@ std::vector<Pattern> placePatterns(const PlacementContext& c, double g, double M
         pat.info.field = H0.norm();
         pat.info.magnetization = M0;
         pat.info.lattice = c.P.latticeOf(int(m));
-        pat.info.spacing = tipSpacing(in, c.P, g, c.fields.fieldHistoryPeak(x0, H0), pat.info.lattice);
+        pat.info.spacing = tipSpacing(in, c.P, g, c.fields.fieldHistoryPeak(x0, n0, H0), pat.info.lattice);
         pat.info.axis = latticeAxis(n0, c.P.orientation);
         bool duplicate = false;
         for (const Pattern& other : patterns)

@@ -81,6 +81,11 @@ struct SpikeInput {
     /// The fluid's flow over earlier frames, for SpikeParams::responseTime (SurfaceFlow.hpp):
     /// the tips are carried by it. Null = the tips stand where the field lays them out.
     std::shared_ptr<const SurfaceFlowHistory> flow;
+    /// The particles' positions [m] at an earlier time [s] (the particle file of the frame
+    /// nearest it; null when there is none or it cannot be read), for
+    /// SurfaceFields::fieldHistoryPeak: where the surface stood when the field was strongest.
+    /// Null = unknown.
+    std::function<std::shared_ptr<const std::vector<Vec3d>>(double)> pastParticles;
 };
 
 /// One hexagonal pattern (one magnet).

@@ -89,8 +89,10 @@ struct SpikeParams {
     double growthTime = 0.2;
     /// Tips carried by the fluid's flow (SurfaceFlow.hpp) [s], in [0, 5]: each tip moves with
     /// the surface velocity under it and the field pulls it back to its lattice site with this
-    /// time constant, dX/dt = u + (L - X) / response_time. A sloshing layer rocks the spikes
-    /// with it; a magnet that slides faster than the pattern follows leaves them trailing.
+    /// time constant, dX/dt = u + s (L - X) / response_time, s in [0, 1] the height the field
+    /// supports there (a strong field pins its tips; where it has fallen away they drift with
+    /// the fluid as they sink). A sloshing layer rocks the spikes with it; a magnet that
+    /// slides faster than the pattern follows leaves them trailing.
     /// 0 = the paper: the tips are laid out anew from the field in every frame. Needs the
     /// particle files of the frames 4 response times back (ferro-spikes reads them from the
     /// --particles pattern; a single frame without a pattern is laid out anew).

@@ -46,13 +46,18 @@ public:
     /// |M| at x now and at the input's past times (SpikeInput::pastMagnets): now first, the
     /// past ones scaled by the law at the magnets' past field there.
     std::vector<double> magnetizationHistory(const Vec3d& x, const Vec3d& H) const;
-    /// The strongest |H| [A/m] at x over the history (SpikeInput::pastMagnets): |H| now times
-    /// the magnets' largest past |H| there over their |H| now (|H| itself in a still or a
-    /// growing field). The paper's spacing l = alpha / |H| takes it: a pattern crowds as its
-    /// field grows, as in the paper, but when the field falls away it sinks on the lattice
-    /// it stood on instead of jumping to the widest spacing in a frame, and widens only as
-    /// the strong past leaves the history (4 growth times).
-    double fieldHistoryPeak(const Vec3d& x, const Vec3d& H) const;
+    /// The strongest |H| [A/m] at the surface point x (outward normal n) over the history
+    /// (SpikeInput::pastMagnets): |H| now times the magnets' largest past |H| over their |H|
+    /// now (|H| itself in a still or a growing field). The paper's spacing l = alpha / |H|
+    /// takes it: a pattern crowds as its field grows, as in the paper, but when the field
+    /// falls away it sinks on the lattice it stood on instead of jumping to the widest spacing
+    /// in a frame, and widens only as the strong past leaves the history (4 growth times).
+    /// The past field is taken where the surface stood then: a heap that collapses after its
+    /// magnet is pulled sinks towards where the magnet was, and the old magnet at the new,
+    /// lower surface overstated the peak by a third (the lattice contracted as the spikes
+    /// sank). With SpikeInput::pastParticles, x is moved along n by the change of the fluid's
+    /// height along that line (its highest particle within 1.5 spacings) since the peak.
+    double fieldHistoryPeak(const Vec3d& x, const Vec3d& n, const Vec3d& H) const;
     /// The largest |M| of the history: where spikes stand, grow or still fade out (the
     /// mapping area, the pattern, the lattice's extent). currentMagnetization in a still field.
     double magnetization(const Vec3d& x, const Vec3d& H) const;
@@ -74,6 +79,11 @@ public:
     /// 0 at M_c, 1 from (1 + fade) M_c on, smooth: scales each spike's height (taken at its tip,
     /// so a spike at the area's edge is lower but still a symmetric cone).
     double magnetizationFade(double M) const;
+    /// The field's hold on a standing spike at |M| [A/m], 0 to 1: the stationary height it
+    /// supports there (magnetizationFade, or the bifurcation's upper branch capped at 1 from
+    /// M_s on: a spike that stands is held down to the lower threshold). SurfaceFlow's pull of
+    /// a carried tip back to its site has the rate hold / response_time.
+    double holdCurve(double M) const;
     /// 0 at M_c, 1 from 1.05 M_c on, smooth: cuts the surface exactly where |M| drops below M_c.
     double magnetizationGate(double M) const;
 

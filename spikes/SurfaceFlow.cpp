@@ -7,6 +7,7 @@
 #include <algorithm>
 #include <cmath>
 #include <fstream>
+#include <limits>
 
 namespace ferro {
 
@@ -25,6 +26,15 @@ bool readSample(const std::string& path, double fallbackTime, FlowSample& s)
     const ParticleTable table = readParticleFile(path);
     if (table.column("vx") < 0 || table.column("vy") < 0 || table.column("vz") < 0) return false;
     const std::vector<Vec3> x = table.vec3("x", "y", "z"), v = table.vec3("vx", "vy", "vz");
+    if (table.column("mx") >= 0 && table.column("my") >= 0 && table.column("mz") >= 0) {
+        const std::vector<Vec3> m = table.vec3("mx", "my", "mz");
+        s.magnetization.reserve(m.size());
+        for (size_t i = 0; i < m.size(); ++i) {
+            if (!m[i].allFinite())
+                throw ParticleFileError(path + ": particle " + std::to_string(i) + " has a non-finite magnetization");
+            s.magnetization.push_back(double(m[i].norm()));
+        }
+    }
     s.time = table.commentNumber("time", fallbackTime);
     if (!std::isfinite(s.time)) throw ParticleFileError(path + ": its time is not a finite number");
     std::vector<Vec3d> positions;
@@ -113,7 +123,25 @@ Vec3d SurfaceFlowHistory::velocityAt(size_t k, const Vec3d& x) const
     return s.velocity[s.grid->nearest(x)];
 }
 
-Vec3d SurfaceFlowHistory::carriedOffset(const Vec3d& site, const Vec3d& n, int magnet, double tau, double t) const
+double SurfaceFlowHistory::magnetizationAt(size_t k, const Vec3d& x) const
+{
+    const FlowSample& s = samples_[k];
+    if (!s.grid || s.grid->empty() || s.magnetization.size() != s.velocity.size())
+        return std::numeric_limits<double>::quiet_NaN();
+    double sum = 0, weight = 0;
+    const double r2 = s.radius * s.radius;
+    s.grid->forEachWithin(x, s.radius, [&](uint32_t i, double d2) {
+        const double q = 1.0 - d2 / r2;
+        const double w = q * q * q;
+        sum += w * s.magnetization[i];
+        weight += w;
+    });
+    if (weight > 0) return sum / weight;
+    return s.magnetization[s.grid->nearest(x)];
+}
+
+Vec3d SurfaceFlowHistory::carriedOffset(const Vec3d& site, const Vec3d& n, int magnet, double tau, double t,
+                                        const std::function<double(double)>& hold) const
 {
     // The samples up to t (a little slack for times written as floats).
     size_t count = 0;
@@ -135,6 +163,13 @@ Vec3d SurfaceFlowHistory::carriedOffset(const Vec3d& site, const Vec3d& n, int m
         move -= move.dot(axis) * axis;
         return site - alongSurface(move, n);
     };
+    // The field's hold on the tip at sample k, where the tip stands then.
+    auto holdAt = [&](size_t k, const Vec3d& x) {
+        if (!hold) return 1.0;
+        const double M = magnetizationAt(k, x);
+        if (!std::isfinite(M)) return 1.0;
+        return std::clamp(hold(M), 0.0, 1.0);
+    };
     Vec3d d = Vec3d::Zero();
     for (size_t k = 0; k < count; ++k) {
         const double a = samples_[k].time;
@@ -147,9 +182,21 @@ Vec3d SurfaceFlowHistory::carriedOffset(const Vec3d& site, const Vec3d& n, int m
         // with the offset it has now; the last interval (past the last sample) holds it.
         const Vec3d fa = alongSurface(velocityAt(k, La + d), n) - siteVelocity;
         const Vec3d fb = k + 1 < count ? Vec3d(alongSurface(velocityAt(k + 1, Lb + d), n) - siteVelocity) : fa;
-        // dd/dt = f(s) - d / tau with f linear over [a, b], integrated exactly.
-        const double E = std::exp(-dt / tau);
-        d = d * E + fa * tau * (1 - E) + (fb - fa) * tau * (1 - tau * (1 - E) / dt);
+        const double sa = holdAt(k, La + d), sb = k + 1 < count ? holdAt(k + 1, Lb + d) : sa;
+        // dd/dt = f(s) - kappa d with f linear over [a, b] and kappa = the mean hold / tau,
+        // integrated exactly: d E + fa I0 + (fb - fa) I1, E = e^(-kappa dt),
+        // I0 = (1 - E) / kappa, I1 = (1 - I0 / dt) / kappa (dt and dt / 2 as kappa -> 0).
+        const double kappa = 0.5 * (sa + sb) / tau, x = kappa * dt;
+        const double E = std::exp(-x);
+        double I0, I1;
+        if (x > 1e-4) {
+            I0 = -std::expm1(-x) / kappa;
+            I1 = (1 - I0 / dt) / kappa;
+        } else { // the series, where the quotients above lose their digits
+            I0 = dt * (1 - x / 2 + x * x / 6);
+            I1 = dt * (0.5 - x / 6 + x * x / 24);
+        }
+        d = d * E + fa * I0 + (fb - fa) * I1;
     }
     return d;
 }

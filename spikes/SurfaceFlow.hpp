@@ -9,13 +9,20 @@
 //     dX/dt = u(X, t) + (L(t) - X) / tau,
 // u the fluid's velocity along the surface at the tip. Its offset d = X - L from the site
 // then obeys dd/dt = u - dL/dt - d / tau: a sloshing layer rocks the tips with it, and a
-// magnet that slides faster than tau lets them follow leaves them trailing. The velocities
+// magnet that slides faster than tau lets them follow leaves them trailing.
+//
+// The field holds a tip to its site only as firmly as it holds the spike up: the pull's rate
+// is s / tau with s in [0, 1] the stationary height the field supports there (the spikes'
+// height curve at the fluid's |M|). A strong field pins its tips to the lattice; where it has
+// fallen away (a magnet pulled off) nothing pulls, and the sinking spikes drift with the
+// fluid, as any other bump on the surface does. The velocities
 // come from the particle files of earlier frames (a frame is still made alone, from the
 // simulation's cache), the sites' motion from the pattern's magnet in those files' headers.
 // Internal to ferro_spikes; depends on sim/core (particle files) and sim/spatial.
 #include "sim/magnets/MagnetField.hpp"
 #include "sim/spatial/HashGrid.hpp"
 
+#include <functional>
 #include <memory>
 #include <string>
 #include <vector>
@@ -26,6 +33,7 @@ namespace ferro {
 struct FlowSample {
     double time = 0;                   ///< [s]
     std::vector<Vec3d> velocity;       ///< per particle [m/s]
+    std::vector<double> magnetization; ///< per particle |M| [A/m]; empty when the file had none
     std::unique_ptr<HashGrid> grid;    ///< over the particles' positions [m]
     double radius = 0;                 ///< Shepard radius: two particle spacings [m]
     std::vector<Magnet> magnets;       ///< the magnets in the file's header (may be empty)
@@ -51,6 +59,9 @@ public:
     /// (1 - d^2/r^2)^3) of the particles within r = sample.radius; where none is that close
     /// (the surface was elsewhere then), the nearest particle's.
     Vec3d velocityAt(size_t k, const Vec3d& x) const;
+    /// The fluid's |M| [A/m] near x at sample k, averaged as velocityAt; NaN when the sample
+    /// has no magnetization.
+    double magnetizationAt(size_t k, const Vec3d& x) const;
 
     /// The tip's offset d(t) [m] from its site at time t [s]: the equation above integrated
     /// from d = 0 at the oldest sample to t (samples after t ignored; between samples the
@@ -60,7 +71,12 @@ public:
     /// magnets; -1, a uniform field or a sample without it: the site stands still) had moved
     /// it from: site - (the magnet's move since then across its axis, along the surface: the
     /// pattern hangs on the magnet's foot). tau > 0 [s].
-    Vec3d carriedOffset(const Vec3d& site, const Vec3d& n, int magnet, double tau, double t) const;
+    /// `hold` maps the fluid's |M| at the tip to the field's hold s in [0, 1] on it: the pull
+    /// back to the site has the rate s / tau (linear in time between samples, exact for a
+    /// constant rate over each interval: the mean of its ends). Without it, or at a sample
+    /// without magnetization, s = 1.
+    Vec3d carriedOffset(const Vec3d& site, const Vec3d& n, int magnet, double tau, double t,
+                        const std::function<double(double)>& hold = {}) const;
 
 private:
     std::vector<FlowSample> samples_;

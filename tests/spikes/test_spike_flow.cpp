@@ -34,9 +34,10 @@ std::vector<Vec3d> gridParticles()
 }
 
 // A history sampled every dt from 0 to tEnd [s], every particle moving at u(t); the magnets
-// (in the samples' headers) at magnets(t).
+// (in the samples' headers) at magnets(t); every particle's |M| M(t) [A/m] (none without it).
 SurfaceFlowHistory syntheticHistory(double dt, double tEnd, const std::function<Vec3d(double)>& u,
-                                    const std::function<std::vector<Magnet>(double)>& magnets = {})
+                                    const std::function<std::vector<Magnet>(double)>& magnets = {},
+                                    const std::function<double(double)>& M = {})
 {
     const std::vector<Vec3d> x = gridParticles();
     std::vector<FlowSample> samples;
@@ -47,6 +48,7 @@ SurfaceFlowHistory syntheticHistory(double dt, double tEnd, const std::function<
         s.radius = 0.004;
         s.grid = std::make_unique<HashGrid>(x, s.radius);
         if (magnets) s.magnets = magnets(s.time);
+        if (M) s.magnetization.assign(x.size(), M(s.time));
         samples.push_back(std::move(s));
     }
     return SurfaceFlowHistory(std::move(samples));
@@ -109,6 +111,48 @@ TEST_CASE("response_time: the carried offset solves dd/dt = u - dL/dt - d/tau (c
         };
         const SurfaceFlowHistory still = syntheticHistory(0.05, 1.0, [](double) { return Vec3d::Zero(); }, uniform);
         REQUIRE(still.carriedOffset(site, n, 0, tau, 1.0).norm() == 0);
+    }
+    SECTION("the field's hold: none lets the flow carry the tip freely, a partial one pulls at hold / tau, and it lets go when the field falls")
+    {
+        const Vec3d u(0.01, -0.004, 0);
+        const SurfaceFlowHistory h = syntheticHistory(0.05, 1.0, [&](double) { return u; }, {},
+                                                      [](double t) { return t < 0.375 ? 10000.0 : 1000.0; });
+        // The hold as the spikes' height curve gives it: here 1 above 5 kA/m, else `low`.
+        for (double low : {0.0, 0.5}) {
+            auto hold = [low](double M) { return M > 5000 ? 1.0 : low; };
+            // Held fully up to the sample at 0.35 s: d = u tau (1 - e^(-t/tau)), and so on to
+            // the next sample (past the last sample taken the flow and the hold hold). Over
+            // the sample interval [0.35, 0.4] the rate is the mean of its ends' holds,
+            // (1 + low) / (2 tau); from 0.4 s on it is low / tau (the exact solutions of
+            // dd/dt = u - kappa d).
+            auto relax = [&](double d, double kappa, double dt) {
+                return kappa > 0 ? d * std::exp(-kappa * dt) + (1 - std::exp(-kappa * dt)) / kappa : d + dt;
+            };
+            const double d035 = tau * (1 - std::exp(-0.35 / tau));
+            const double d04 = relax(d035, (1 + low) / (2 * tau), 0.05);
+            for (double t : {0.2, 0.375, 0.4, 0.7, 1.0}) {
+                const double expected = t < 0.399 ? tau * (1 - std::exp(-t / tau)) : relax(d04, low / tau, t - 0.4);
+                INFO("hold " << low << " after the fall, t = " << t);
+                REQUIRE((h.carriedOffset(site, n, -1, tau, t, hold) - u * expected).norm() < 1e-12);
+            }
+        }
+        // Without a hold, or at samples without magnetization, the pull is the full 1 / tau.
+        const SurfaceFlowHistory bare = syntheticHistory(0.05, 1.0, [&](double) { return u; });
+        REQUIRE((bare.carriedOffset(site, n, -1, tau, 1.0, [](double) { return 0.0; }) -
+                 u * tau * (1 - std::exp(-1.0 / tau))).norm() < 1e-12);
+        REQUIRE((h.carriedOffset(site, n, -1, tau, 1.0) - u * tau * (1 - std::exp(-1.0 / tau))).norm() < 1e-12);
+        // Sloshing with no hold at all: the tip rides the flow, d = integral of u (a sine's
+        // integral; sampled at 120 Hz, linear interpolation misses by t dt^2 U w^2 / 12, about
+        // 0.2 % of U / w by 0.3 s).
+        const double U = 0.02, w = 2 * kPi / 0.5;
+        const SurfaceFlowHistory slosh = syntheticHistory(1.0 / 120, 1.0, [&](double t) { return Vec3d(U * std::sin(w * t), 0, 0); },
+                                                          {}, [](double) { return 1000.0; });
+        for (double t : {0.3, 0.55, 0.9}) {
+            const double exact = U / w * (1 - std::cos(w * t));
+            INFO("t = " << t);
+            REQUIRE(std::abs(slosh.carriedOffset(site, n, -1, tau, t, [](double) { return 0.0; }).x() - exact) <
+                    0.005 * U / w);
+        }
     }
     SECTION("samples after t do not count")
     {

@@ -434,6 +434,63 @@ TEST_CASE("spikes grow over spikes.growth_time after the field jumps on, and equ
     REQUIRE(frame(lagged, 1.85).mesh.vertices == frame(instant, 1.85).mesh.vertices);
 }
 
+TEST_CASE("a heap that collapses when its magnet is pulled away sinks on the lattice it stood on: the spacing keeps the field where the surface stood at the peak",
+          "[spikes][growth]")
+{
+    // A dipole under the dish's centre, 2 cm down until 0.5 s, pulled straight down to 3.5 cm
+    // by 0.6 s. At 0.5 s its field has raised a heap 4 mm over the layer; at 0.7 s the heap has
+    // collapsed to a flat layer 0.5 mm over the old level. The paper's spacing alpha / |H| keeps
+    // the strongest field of the growth time's history (0.8 s: the peak is the heap's own
+    // field). The reference is the heap frame's own spacing, computed from its own field.
+    const double R = 0.04, heap = 0.004, width = 0.015, flat = kDepth + 0.0005;
+    const std::string text = dishScene(R, "[[magnets]]\nkind = \"dipole\"\nposition = [0.0, 0.0, -0.02]\n"
+                                          "direction = [0.0, 0.0, 1.0]\nmoment = 3.0\n"
+                                          "[[magnets.keys]]\ntime = 0.5\nposition = [0.0, 0.0, -0.02]\n"
+                                          "[[magnets.keys]]\ntime = 0.6\nposition = [0.0, 0.0, -0.035]\n"
+                                          "[shot]\nfps = 30\n");
+    const SpikeScene sc = scene(text);
+    REQUIRE(sc.params.growthTime == 0.2);
+    ferro::test::TempDir dir("collapse");
+    auto height = [&](double r, bool heaped) { return heaped ? kDepth + heap * std::exp(-r * r / (width * width)) : flat; };
+    // Frame f: its surface and its particles, columns 2 mm apart whose top particle is 1 mm
+    // under the surface (no magnetization columns: the field is the magnet's alone).
+    auto writeFrame = [&](int f, bool heaped) {
+        TriangleMesh pool = spiketest::makePool(R, 24, [&](double r, double) { return height(r, heaped); });
+        setComment(pool, "time", std::to_string(f / 30.0));
+        writeMesh(dir.file("surface_" + std::to_string(f) + ".ply"), pool);
+        ParticleTable t;
+        t.names = {"x", "y", "z"};
+        for (int i = -19; i <= 19; ++i)
+            for (int j = -19; j <= 19; ++j) {
+                const double r = 0.002 * std::hypot(i, j);
+                if (r > 0.038) continue;
+                for (double z = height(r, heaped) - 0.001; z > 0; z -= 0.002)
+                    t.values.insert(t.values.end(), {0.002f * i, 0.002f * j, float(z)});
+            }
+        t.setComment("time", std::to_string(f / 30.0));
+        t.setComment("frame", std::to_string(f));
+        t.setComment("spacing", "0.002");
+        writeParticleFile(framePath(dir.file("particles_{:04}.ply"), f), t);
+    };
+    writeFrame(15, true);   // 0.5 s, the peak
+    writeFrame(21, false);  // 0.7 s, collapsed
+    const std::string pattern = dir.file("particles_{:04}.ply");
+    auto spacing = [&](int f, const std::string& history) {
+        const SpikeResult res = spikeFrame(sc, dir.file("surface_" + std::to_string(f) + ".ply"), framePath(pattern, f),
+                                           dir.file("spiky.ply"), f, history);
+        REQUIRE(res.patterns.size() == 1);
+        return res.patterns.front().spacing;
+    };
+    const double atPeak = spacing(15, pattern), collapsed = spacing(21, pattern), guessed = spacing(21, "");
+    INFO("spacing at the peak " << atPeak * 1e3 << " mm, collapsed " << collapsed * 1e3
+                                << " mm, without the peak frame's particles " << guessed * 1e3 << " mm");
+    // The collapsed layer's tips stand on the heap's lattice...
+    REQUIRE(collapsed == Approx(atPeak).epsilon(0.005));
+    // ...which the old magnet taken at the new, lower surface overstates (the point is 3.5 mm
+    // nearer to it: ((20 + 14) / (20 + 10.5))^3 = 1.39 times the field, the lattice 28 % tighter).
+    REQUIRE(guessed < 0.8 * atPeak);
+}
+
 TEST_CASE("the spikes' own velocity is the rate of their displacement: a field ramped linearly grows them at height * dH/dt / H",
           "[spikes][velocity]")
 {
