@@ -36,26 +36,80 @@ std::vector<SpikeTipSample> findTips(const TriangleMesh& spiky, const TriangleMe
         for (int k = 0; k < 3; ++k)
             for (int l = 0; l < 3; ++l)
                 if (k != l && h[t[size_t(l)]] > h[t[size_t(k)]]) isMax[t[size_t(k)]] = 0;
+    std::vector<uint32_t> maxima;
     for (size_t i = 0; i < n; ++i)
-        if (isMax[i]) tips.push_back({spiky.vertices[i].cast<double>(), h[i]});
-    std::sort(tips.begin(), tips.end(), [](const auto& a, const auto& b) { return a.height > b.height; });
+        if (isMax[i]) maxima.push_back(uint32_t(i));
+    std::sort(maxima.begin(), maxima.end(), [&](uint32_t a, uint32_t b) { return h[a] > h[b] || (h[a] == h[b] && a < b); });
+    for (uint32_t i : maxima) tips.push_back({spiky.vertices[i].cast<double>(), h[i]});
 
     // Two maxima on one spike (a flat-topped tip, remeshing noise): keep the higher of any
     // two closer than half the median spacing.
     const double radius = 0.5 * medianTipSpacing(tips);
     std::vector<SpikeTipSample> kept;
-    for (const auto& t : tips) {
+    std::vector<uint32_t> keptVertex;
+    for (size_t k = 0; k < tips.size(); ++k) {
         bool near2 = false;
-        for (const auto& k : kept) near2 = near2 || (k.position - t.position).norm() < radius;
-        if (!near2) kept.push_back(t);
+        for (const auto& other : kept) near2 = near2 || (other.position - tips[k].position).norm() < radius;
+        if (!near2) kept.push_back(tips[k]), keptVertex.push_back(maxima[k]);
     }
-    // The surface under each tip: the nearest surface vertex to the point the tip's height
-    // below it along the normal there (for a leaning spike, closer to its foot than the
-    // apex's own nearest vertex).
+    // Each tip's foot. The spike is what is reached from the apex going downhill over the
+    // mesh's edges, down to 5 % of its height. A spike that leans is a stack of slices each
+    // shifted along the lean, so its volume's centroid lies on its axis: the axis runs from
+    // the apex through that centroid (the columns between the surface and the mesh, at their
+    // mid-height, weighted by height times the area seen along the normal).
+    std::vector<std::vector<uint32_t>> ring(n);
+    std::vector<Vec3d> vectorArea(n, Vec3d::Zero());
+    for (const auto& t : spiky.triangles) {
+        const Vec3d a = spiky.vertices[t[0]].cast<double>(), b = spiky.vertices[t[1]].cast<double>(),
+                    c = spiky.vertices[t[2]].cast<double>();
+        const Vec3d third = (b - a).cross(c - a) / 6.0;
+        for (int k = 0; k < 3; ++k) {
+            vectorArea[t[size_t(k)]] += third;
+            ring[t[size_t(k)]].push_back(t[size_t((k + 1) % 3)]);
+            ring[t[size_t(k)]].push_back(t[size_t((k + 2) % 3)]);
+        }
+    }
+    std::vector<char> seen(n, 0);
+    std::vector<uint32_t> visited, stack;
+    // The surface under each tip: the nearest surface vertex to its foot (without a foot, to
+    // the point the tip's height below the apex along the normal there).
     const bool velocities = surface.velocities.size() == surface.vertices.size();
-    for (auto& t : kept) {
+    for (size_t k = 0; k < kept.size(); ++k) {
+        SpikeTipSample& t = kept[k];
         const uint32_t j0 = near.nearest(t.position);
-        const uint32_t j = near.nearest(t.position - t.height * normals[j0]);
+        const Vec3d n0 = normals[j0];
+        Vec3d foot = t.position - t.height * n0;
+        const uint32_t apex = keptVertex[k];
+        if (t.height > 0) {
+            Vec3d moment = Vec3d::Zero();
+            double volume = 0;
+            stack.assign(1, apex);
+            seen[apex] = 1;
+            visited.assign(1, apex);
+            while (!stack.empty()) {
+                const uint32_t v = stack.back();
+                stack.pop_back();
+                const double column = std::max(0.0, vectorArea[v].dot(n0)) * h[v];
+                moment += column * (spiky.vertices[v].cast<double>() - 0.5 * h[v] * n0);
+                volume += column;
+                for (uint32_t w : ring[v])
+                    if (!seen[w] && h[w] <= h[v] + 1e-12 && h[w] >= 0.05 * t.height) {
+                        seen[w] = 1;
+                        visited.push_back(w);
+                        stack.push_back(w);
+                    }
+            }
+            for (uint32_t v : visited) seen[v] = 0;
+            if (visited.size() >= 7 && volume > 0) {
+                const Vec3d axis = (t.position - moment / volume).normalized();
+                if (axis.dot(n0) > 0.3) { // a spike leaning more than 73 degrees has no clear foot
+                    foot = t.position - (t.height / axis.dot(n0)) * axis;
+                    t.base = foot;
+                    t.hasBase = true;
+                }
+            }
+        }
+        const uint32_t j = near.nearest(foot);
         t.normal = normals[j];
         if (velocities) t.surfaceVelocity = surface.velocities[j].cast<double>();
         t.hasVelocity = velocities;
@@ -198,7 +252,8 @@ TipFrameMatch matchTips(const std::vector<SpikeTipSample>& a, const std::vector<
                 Vec3d n = a[i].normal + b[j].normal;
                 n = n.norm() > 0 ? Vec3d(n.normalized()) : Vec3d(0, 0, 1);
                 auto along = [&](const Vec3d& v) { return Vec3d(v - v.dot(n) * n); };
-                const Vec3d v = along((b[j].position - a[i].position) / interval);
+                const bool feet = a[i].hasBase && b[j].hasBase;
+                const Vec3d v = along(((feet ? b[j].base : b[j].position) - (feet ? a[i].base : a[i].position)) / interval);
                 const Vec3d u = along(0.5 * (a[i].surfaceVelocity + b[j].surfaceVelocity));
                 sumU += u.norm();
                 sumV += v.norm();

@@ -22,6 +22,13 @@ struct SpikeTipSample {
     Vec3d normal{0, 0, 1};                 ///< the undisplaced surface's unit normal under the tip
     Vec3d surfaceVelocity = Vec3d::Zero(); ///< the undisplaced surface's velocity under the tip [m/s]
     bool hasVelocity = false;              ///< the surface mesh had vertex velocities
+    /// The spike's foot [m]: where its axis meets the undisplaced surface. The axis runs from
+    /// the apex through the centroid of the spike's flank at 30-60 % of its height (the flank
+    /// reached downhill from the apex), so a leaning spike's foot is not under its apex. A
+    /// tip carried by the flow is its foot moving; a leaning spike that sinks or straightens
+    /// moves its apex over a still foot.
+    Vec3d base = Vec3d::Zero();
+    bool hasBase = false;                  ///< base was found (else the flow uses the apex)
 };
 
 struct TipFinderParams {
@@ -62,8 +69,9 @@ struct TipFrameMatch {
     double maxResidual = 0;
     /// Do the tips move with the fluid under them? Over the matched interior tips of both
     /// frames' surfaces with velocities, along the surface (the mean of the two normals):
-    /// a tip's velocity v = its move / the frame interval, the fluid's u = the mean of the
-    /// surface velocity under it in the two frames. 0 when there is no interval or velocity.
+    /// a tip's velocity v = its foot's move (SpikeTipSample::base; the apex's where a frame
+    /// has none) / the frame interval, the fluid's u = the mean of the surface velocity under
+    /// it in the two frames. 0 when there is no interval or velocity.
     int flowTips = 0;            ///< the tips compared
     double surfaceSpeed = 0;     ///< mean |u| [m/s]
     double tipSpeed = 0;         ///< mean |v| [m/s]

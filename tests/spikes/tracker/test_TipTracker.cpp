@@ -65,6 +65,49 @@ TEST_CASE("findTips finds every bump of a pool at its place and height, and noth
     REQUIRE(medianTipSpacing(found) == Approx(kSpacing).epsilon(0.05));
 }
 
+TEST_CASE("findTips finds a leaning spike's foot where its axis meets the surface, not under its apex", "[tips][flow]") {
+    // Bumps leaning along +x: the level at height b of a bump of height h is the disc of
+    // radius 0.45 l (cos^2 profile) centred lambda b to the side, so its axis has slope
+    // 1 / lambda and its apex stands lambda h off its foot (0.8 mm).
+    const double lambda = 0.4, w = 0.45 * kSpacing;
+    const std::vector<TrueTip> truth = lattice(0.012, 2e-3);
+    const TriangleMesh surface = spiketest::makeFlatPool(0.03, 0.005, 120);
+    const TriangleMesh leaning = spiketest::makePool(0.03, 120, [&](double r, double a) {
+        const double x = r * std::cos(a), y = r * std::sin(a);
+        double z = 0.005;
+        for (const TrueTip& t : truth) {
+            if (std::hypot(x - t.x, y - t.y) > w + lambda * t.h) continue;
+            // b = h cos^2(pi/2 d(b) / w), d(b) = |(x - t.x - lambda b, y - t.y)|: increasing
+            // in b minus the right-hand side, bisected.
+            auto excess = [&](double b) {
+                const double d = std::hypot(x - t.x - lambda * b, y - t.y) / w;
+                return b - (d < 1 ? t.h * std::pow(std::cos(0.5 * M_PI * d), 2) : 0.0);
+            };
+            double lo = 0, hi = t.h;
+            if (excess(lo) >= 0) continue;
+            for (int k = 0; k < 60; ++k) (excess(0.5 * (lo + hi)) < 0 ? lo : hi) = 0.5 * (lo + hi);
+            z += 0.5 * (lo + hi);
+        }
+        return z;
+    });
+    const std::vector<SpikeTipSample> found = findTips(leaning, surface);
+    REQUIRE(found.size() == truth.size());
+    for (const TrueTip& t : truth) {
+        const SpikeTipSample* f = nullptr;
+        for (const SpikeTipSample& s : found)
+            if (!f || std::hypot(s.position.x() - t.x - lambda * t.h, s.position.y() - t.y) <
+                          std::hypot(f->position.x() - t.x - lambda * t.h, f->position.y() - t.y))
+                f = &s;
+        INFO("tip at (" << t.x * 1e3 << ", " << t.y * 1e3 << ") mm, " << t.h * 1e3 << " mm tall");
+        REQUIRE(f->hasBase);
+        // The apex stands lambda h to the side (within the mesh's 0.25 mm vertex spacing)...
+        REQUIRE(std::abs(f->position.x() - t.x - lambda * t.h) < 0.25e-3);
+        // ...the foot is where the bump stands on the surface.
+        CHECK(std::hypot(f->base.x() - t.x, f->base.y() - t.y) < 0.1e-3);
+        CHECK(f->base.z() == Approx(0.005).margin(1e-6));
+    }
+}
+
 TEST_CASE("matchTips counts matches, moves, births and deaths of known tip sets", "[tips]") {
     // Frame a: a row of five tips 5 mm apart, the last one small (the fading edge).
     const std::vector<SpikeTipSample> a = {sample(0, 0, 3e-3), sample(0.005, 0, 3e-3), sample(0.010, 0, 2e-3),
@@ -191,6 +234,13 @@ TEST_CASE("matchTips compares each tip's move with the surface velocity under it
     std::vector<SpikeTipSample> shifted = stillSurface;
     for (auto& s : shifted) s.position += u * dt;
     REQUIRE(std::isinf(matchTips(stillSurface, shifted, 0.5, 0.25, true, dt).flowMismatch));
+    // With their feet known, the feet's move is compared: spikes whose apexes swing by a
+    // third of a spacing (a lean that changes) while their feet ride the flow ride it.
+    std::vector<SpikeTipSample> footed = a;
+    for (auto& s : footed) s.base = s.position - Vec3d(0, 0, s.height), s.hasBase = true;
+    std::vector<SpikeTipSample> swung = footed;
+    for (auto& s : swung) s.base += u * dt, s.position += u * dt + Vec3d(0.3 * kSpacing, 0, 0);
+    REQUIRE(matchTips(footed, swung, 0.5, 0.25, true, dt).flowMismatch < 1e-9);
     // Without an interval, or without velocities, nothing is compared.
     REQUIRE(matchTips(a, moved(1.0)).flowTips == 0);
     std::vector<SpikeTipSample> still = a;
