@@ -66,6 +66,10 @@ run() { "$root/scripts/shot.sh" "$scene" "$1" "${common[@]}" "${@:2}" 2> "$1.log
           { tail -3 "$1.log" >&2; exit 3; }; }
 
 echo "spike-hysteresis.sh: fade (the default), simulating frames 0-75" >&2
+# The simulation is kept; the spikes and everything after them are made again (make would
+# otherwise keep the frames' mesh includes of an earlier ferro-spikes: its meshes are
+# secondary files, and a missing one does not make the include out of date).
+rm -rf "$work/fade/spiky" "$work/fade/png" "$work/fade/shot"/mesh_*.inc
 run "$work/fade"
 rm -rf "$work/bifurcation"
 cp -a "$work/fade" "$work/bifurcation"
