@@ -106,21 +106,33 @@ SurfaceFlowHistory::SurfaceFlowHistory(std::vector<FlowSample> samples) : sample
     std::sort(samples_.begin(), samples_.end(), [](const FlowSample& a, const FlowSample& b) { return a.time < b.time; });
 }
 
-Vec3d SurfaceFlowHistory::velocityAt(size_t k, const Vec3d& x) const
+namespace {
+
+// The Shepard average (weight (1 - d^2/r^2)^3) of a per-particle value of sample s near x,
+// over the particles within r = s.radius; where none is that close, the nearest particle's.
+// s has a non-empty grid.
+template <class T> T shepardAverage(const FlowSample& s, const std::vector<T>& value, const Vec3d& x, T zero)
 {
-    const FlowSample& s = samples_[k];
-    if (!s.grid || s.grid->empty()) return Vec3d::Zero();
-    Vec3d sum = Vec3d::Zero();
+    T sum = zero;
     double weight = 0;
     const double r2 = s.radius * s.radius;
     s.grid->forEachWithin(x, s.radius, [&](uint32_t i, double d2) {
         const double q = 1.0 - d2 / r2;
         const double w = q * q * q;
-        sum += w * s.velocity[i];
+        sum += w * value[i];
         weight += w;
     });
     if (weight > 0) return sum / weight;
-    return s.velocity[s.grid->nearest(x)];
+    return value[s.grid->nearest(x)];
+}
+
+} // namespace
+
+Vec3d SurfaceFlowHistory::velocityAt(size_t k, const Vec3d& x) const
+{
+    const FlowSample& s = samples_[k];
+    if (!s.grid || s.grid->empty()) return Vec3d::Zero();
+    return shepardAverage<Vec3d>(s, s.velocity, x, Vec3d::Zero());
 }
 
 double SurfaceFlowHistory::magnetizationAt(size_t k, const Vec3d& x) const
@@ -128,16 +140,7 @@ double SurfaceFlowHistory::magnetizationAt(size_t k, const Vec3d& x) const
     const FlowSample& s = samples_[k];
     if (!s.grid || s.grid->empty() || s.magnetization.size() != s.velocity.size())
         return std::numeric_limits<double>::quiet_NaN();
-    double sum = 0, weight = 0;
-    const double r2 = s.radius * s.radius;
-    s.grid->forEachWithin(x, s.radius, [&](uint32_t i, double d2) {
-        const double q = 1.0 - d2 / r2;
-        const double w = q * q * q;
-        sum += w * s.magnetization[i];
-        weight += w;
-    });
-    if (weight > 0) return sum / weight;
-    return s.magnetization[s.grid->nearest(x)];
+    return shepardAverage<double>(s, s.magnetization, x, 0.0);
 }
 
 Vec3d SurfaceFlowHistory::carriedOffset(const Vec3d& site, const Vec3d& n, int magnet, double tau, double t,
