@@ -20,6 +20,7 @@
 #include <cstdio>
 #include <cstring>
 #include <exception>
+#include <filesystem>
 #include <fstream>
 #include <functional>
 #include <memory>
@@ -298,7 +299,8 @@ namespace {
 
 // SpikeInput::pastParticles from the particle files of `pattern`: the file of the frame
 // nearest a time, read once (positions only); null where the file does not exist (before the
-// shot, a range simulated only in part). A file that exists but cannot be read is an error.
+// shot, a range simulated only in part). A file that exists but cannot be read is an error
+// (SpikeInputError naming it).
 std::function<std::shared_ptr<const std::vector<Vec3d>>(double)> pastParticleReader(const std::string& pattern,
                                                                                   double fps)
 {
@@ -313,9 +315,15 @@ std::function<std::shared_ptr<const std::vector<Vec3d>>(double)> pastParticleRea
         if (found != cache->end()) return found->second;
         Positions result;
         const std::string path = framePath(pattern, frame);
-        if (std::ifstream(path).good()) {
+        if (std::filesystem::exists(path)) {
             try {
-                const std::vector<Vec3> x = readParticleFile(path).vec3("x", "y", "z");
+                const ParticleTable table = readParticleFile(path);
+                std::vector<Vec3> x;
+                try {
+                    x = table.vec3("x", "y", "z");
+                } catch (const ParticleFileError& e) {
+                    throw ParticleFileError(path + ": " + e.what());
+                }
                 auto positions = std::make_shared<std::vector<Vec3d>>();
                 positions->reserve(x.size());
                 for (size_t i = 0; i < x.size(); ++i) {
@@ -345,7 +353,8 @@ SpikeResult spikeFrame(const SpikeScene& scene, const std::string& surfacePath, 
         // The frame's number: the range's, else the frame's time (header) at the shot's rate.
         const int frame = frameHint >= 0 ? frameHint : int(std::lround(in.time * scene.fps));
         try {
-            in.flow = SurfaceFlowHistory::load(historyPattern, frame, scene.params.responseTime, scene.fps);
+            in.flow = SurfaceFlowHistory::load(historyPattern, frame, scene.params.responseTime, scene.fps,
+                                               4.0 * scene.params.growthTime);
         } catch (const ParticleFileError& e) {
             throw SpikeInputError(e.what());
         }

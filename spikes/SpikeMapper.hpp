@@ -82,7 +82,7 @@ struct SpikeInput {
     /// the tips are carried by it. Null = the tips stand where the field lays them out.
     std::shared_ptr<const SurfaceFlowHistory> flow;
     /// The particles' positions [m] at an earlier time [s] (the particle file of the frame
-    /// nearest it; null when there is none or it cannot be read), for
+    /// nearest it; null when there is none; SpikeInputError when it cannot be read), for
     /// SurfaceFields::fieldHistoryPeak: where the surface stood when the field was strongest.
     /// Null = unknown.
     std::function<std::shared_ptr<const std::vector<Vec3d>>(double)> pastParticles;

@@ -73,7 +73,7 @@ Vec3d alongSurface(const Vec3d& v, const Vec3d& n) { return v - v.dot(n) * n; }
 } // namespace
 
 std::shared_ptr<const SurfaceFlowHistory> SurfaceFlowHistory::load(const std::string& pattern, int frame, double tau,
-                                                                   double fps)
+                                                                   double fps, double window)
 {
     std::vector<FlowSample> samples;
     if (!(tau > 0) || !(fps > 0) || frame < 0) return std::make_shared<SurfaceFlowHistory>(std::move(samples));
@@ -81,7 +81,7 @@ std::shared_ptr<const SurfaceFlowHistory> SurfaceFlowHistory::load(const std::st
     // (between them the velocity is interpolated: a slosh of 0.4 s period gets 8 a period) and
     // at most kMaxSamples of them (longer response times space them wider).
     constexpr int kMaxSamples = 64; // the frame itself and at most 63 before it
-    const int span = int(std::ceil(4.0 * tau * fps));
+    const int span = int(std::ceil(std::max(4.0 * tau, std::isfinite(window) ? window : 0.0) * fps));
     const int stride = std::max({1, int(std::floor(std::min(0.5 * tau, 0.05) * fps + 1e-9)),
                                  (span + kMaxSamples - 2) / (kMaxSamples - 1)});
     const int oldest = std::max(0, frame - span);
@@ -174,6 +174,7 @@ Vec3d SurfaceFlowHistory::carriedOffset(const Vec3d& site, const Vec3d& n, int m
         return std::clamp(hold(M), 0.0, 1.0);
     };
     Vec3d d = Vec3d::Zero();
+    bool held = false;
     for (size_t k = 0; k < count; ++k) {
         const double a = samples_[k].time;
         const double b = k + 1 < count ? samples_[k + 1].time : t;
@@ -186,6 +187,8 @@ Vec3d SurfaceFlowHistory::carriedOffset(const Vec3d& site, const Vec3d& n, int m
         const Vec3d fa = alongSurface(velocityAt(k, La + d), n) - siteVelocity;
         const Vec3d fb = k + 1 < count ? Vec3d(alongSurface(velocityAt(k + 1, Lb + d), n) - siteVelocity) : fa;
         const double sa = holdAt(k, La + d), sb = k + 1 < count ? holdAt(k + 1, Lb + d) : sa;
+        if (!held && !(sa > 0) && !(sb > 0)) continue; // no spike here yet: nothing to carry
+        held = true;
         // dd/dt = f(s) - kappa d with f linear over [a, b] and kappa = the mean hold / tau,
         // integrated exactly: d E + fa I0 + (fb - fa) I1, E = e^(-kappa dt),
         // I0 = (1 - E) / kappa, I1 = (1 - I0 / dt) / kappa (dt and dt / 2 as kappa -> 0).

@@ -43,13 +43,16 @@ struct FlowSample {
 class SurfaceFlowHistory {
 public:
     /// Reads the particle files of the frame and of the multiples of a stride before it, back
-    /// over 4 tau [s] (stride = the frames in min(tau / 2, 0.05 s), at least one, at most 64
-    /// files), stopping at frame 0 or at the first
+    /// over max(4 tau, window) [s] (stride = the frames in min(tau / 2, 0.05 s), at least one,
+    /// at most 64 files), stopping at frame 0 or at the first
     /// file that is missing; `pattern` has a {:04} / %04d placeholder, fps gives a file
     /// without a `time` header its time. Files without velocity columns (vx, vy, vz) end the
     /// history there too. Throws ParticleFileError on a malformed file.
+    /// `window`: a tip that the field no longer holds keeps the whole drift of the history,
+    /// so the history must reach back past the time its spikes took to sink (ferro-spikes
+    /// passes 4 growth times, the spikes' own memory).
     static std::shared_ptr<const SurfaceFlowHistory> load(const std::string& pattern, int frame, double tau,
-                                                          double fps);
+                                                          double fps, double window = 0);
     /// A history from samples already in memory (tests), sorted by time here.
     explicit SurfaceFlowHistory(std::vector<FlowSample> samples);
 
@@ -74,7 +77,8 @@ public:
     /// `hold` maps the fluid's |M| at the tip to the field's hold s in [0, 1] on it: the pull
     /// back to the site has the rate s / tau (linear in time between samples, exact for a
     /// constant rate over each interval: the mean of its ends). Without it, or at a sample
-    /// without magnetization, s = 1.
+    /// without magnetization, s = 1. The offset starts at 0 at the first interval the field
+    /// holds at either end: before a field held it there was no spike there to carry.
     Vec3d carriedOffset(const Vec3d& site, const Vec3d& n, int magnet, double tau, double t,
                         const std::function<double(double)>& hold = {}) const;
 

@@ -35,7 +35,8 @@ shot() {
   key="$( (echo "$text"; echo "$count") | sha1sum | cut -c1-16)"
   dir="$cache/flow-tips/$1-$key"
   set -- "$1" "$3" "$4"
-  if [[ ! -f "$dir/done" ]]; then
+  # A cache made by a run that simulated fewer frames is not enough.
+  if [[ ! -f "$dir/done" || ! -f "$dir/particles/particles_$(printf %04d "$3").ply" ]]; then
     bench_note "simulating and meshing $1 at $count particles (cached in $dir)"
     rm -rf "$dir"; mkdir -p "$dir/surface"
     echo "$text" | sed "s/^count = .*/count = $count/" > "$dir/scene.toml"
@@ -82,7 +83,7 @@ echo "shot,response_time_s,frame,flow_tips,surface_speed_mm_s,tip_speed_mm_s,flo
 
 # The slide's own heap, no spikes: its apex against the fluid under it while the magnet moves
 # (1.0-1.5 s: frames 120-180 of the 120 fps shot, the dir of the last shot() call).
-python3 "$root/scripts/bench/heap_motion.py" "$dir/particles" 116 184 --moving 120:180 > "$out/heap_motion.csv"
+python3 "$root/scripts/bench/heap_motion.py" "$dir/particles" 116 180 --moving 120:180 > "$out/heap_motion.csv"
 heap="$(tail -1 "$out/heap_motion.csv" | tr -d '# ')"
 IFS=, read -r heap_travel heap_speed heap_fluid heap_ratio <<< "$heap"
 

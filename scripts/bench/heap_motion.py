@@ -32,18 +32,21 @@ def read_particles(path):
     with open(path, "rb") as f:
         data = f.read()
     end = data.index(b"end_header\n") + len(b"end_header\n")
-    props, count, header = [], 0, {}
+    props, types, count, header = [], [], 0, {}
     for line in data[:end].decode("ascii", "replace").split("\n"):
         w = line.split()
         if w[:2] == ["element", "vertex"]:
             count = int(w[2])
         elif w[:1] == ["property"]:
             props.append(w[-1])
+            types.append(w[1])
         elif w[:1] == ["comment"] and len(w) >= 3:
             header.setdefault(w[1], w[2])
     missing = [c for c in ("x", "y", "z", "vx", "vy", "vz") if c not in props]
     if missing:
         sys.exit("heap_motion.py: %s has no %s column" % (path, ", ".join(missing)))
+    if any(t not in ("float", "float32") for t in types):
+        sys.exit("heap_motion.py: %s: only float32 columns are read (a compact cache? write full particle files)" % path)
     k = len(props)
     values = struct.unpack("<%df" % (k * count), data[end:end + 4 * k * count])
     cols = [props.index(c) for c in ("x", "y", "z", "vx", "vy", "vz")]
@@ -74,8 +77,12 @@ def apex(path, radius):
             sw += w
             sx += w * (i + 0.5) * c
             sy += w * (j + 0.5) * c
+    if sw == 0:
+        sys.exit("heap_motion.py: %s: no heap (the surface is flat)" % path)
     ax, ay = sx / sw, sy / sw
     under = [q for q in top.values() if (q[0] - ax) ** 2 + (q[1] - ay) ** 2 < radius * radius]
+    if not under:
+        sys.exit("heap_motion.py: %s: no surface particle within --radius of the apex" % path)
     ux = sum(q[3] for q in under) / len(under)
     uy = sum(q[4] for q in under) / len(under)
     return t, ax, ay, smooth[peak] - base, ux, uy

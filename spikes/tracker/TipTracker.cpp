@@ -53,7 +53,9 @@ std::vector<SpikeTipSample> findTips(const TriangleMesh& spiky, const TriangleMe
         if (!near2) kept.push_back(tips[k]), keptVertex.push_back(maxima[k]);
     }
     // Each tip's foot. The spike is what is reached from the apex going downhill over the
-    // mesh's edges, down to 5 % of its height. A spike that leans is a stack of slices each
+    // mesh's edges, down to 5 % of its height and within 0.75 tip spacings of the apex along
+    // the surface (a saddle to a taller neighbour above 5 % does not let the fill far into its
+    // flank). A spike that leans is a stack of slices each
     // shifted along the lean, so its volume's centroid lies on its axis: the axis runs from
     // the apex through that centroid (the columns between the surface and the mesh, at their
     // mid-height, weighted by height times the area seen along the normal).
@@ -71,6 +73,11 @@ std::vector<SpikeTipSample> findTips(const TriangleMesh& spiky, const TriangleMe
     }
     std::vector<char> seen(n, 0);
     std::vector<uint32_t> visited, stack;
+    // Within 0.75 of the median tip spacing of the apex along the surface (0 with one tip: no
+    // limit): past a saddle a neighbour's flank begins, but a leaning spike's own far flank
+    // reaches beyond half a spacing.
+    const double reach = 1.5 * radius;
+    auto alongPlane = [](const Vec3d& d, const Vec3d& normal) { return (d - d.dot(normal) * normal).norm(); };
     // The surface under each tip: the nearest surface vertex to its foot (without a foot, to
     // the point the tip's height below the apex along the normal there).
     const bool velocities = surface.velocities.size() == surface.vertices.size();
@@ -93,7 +100,8 @@ std::vector<SpikeTipSample> findTips(const TriangleMesh& spiky, const TriangleMe
                 moment += column * (spiky.vertices[v].cast<double>() - 0.5 * h[v] * n0);
                 volume += column;
                 for (uint32_t w : ring[v])
-                    if (!seen[w] && h[w] <= h[v] + 1e-12 && h[w] >= 0.05 * t.height) {
+                    if (!seen[w] && h[w] <= h[v] + 1e-12 && h[w] >= 0.05 * t.height &&
+                        !(reach > 0 && alongPlane(spiky.vertices[w].cast<double>() - t.position, n0) > reach)) {
                         seen[w] = 1;
                         visited.push_back(w);
                         stack.push_back(w);

@@ -23,8 +23,9 @@ struct SpikeTipSample {
     Vec3d surfaceVelocity = Vec3d::Zero(); ///< the undisplaced surface's velocity under the tip [m/s]
     bool hasVelocity = false;              ///< the surface mesh had vertex velocities
     /// The spike's foot [m]: where its axis meets the undisplaced surface. The axis runs from
-    /// the apex through the centroid of the spike's flank at 30-60 % of its height (the flank
-    /// reached downhill from the apex), so a leaning spike's foot is not under its apex. A
+    /// the apex through the centroid of the spike's volume (the mesh reached downhill from the
+    /// apex down to 5 % of its height and within 0.75 median tip spacings, as columns over
+    /// the surface), so a leaning spike's foot is not under its apex. A
     /// tip carried by the flow is its foot moving; a leaning spike that sinks or straightens
     /// moves its apex over a still foot.
     Vec3d base = Vec3d::Zero();

@@ -141,17 +141,44 @@ TEST_CASE("response_time: the carried offset solves dd/dt = u - dL/dt - d/tau (c
         REQUIRE((bare.carriedOffset(site, n, -1, tau, 1.0, [](double) { return 0.0; }) -
                  u * tau * (1 - std::exp(-1.0 / tau))).norm() < 1e-12);
         REQUIRE((h.carriedOffset(site, n, -1, tau, 1.0) - u * tau * (1 - std::exp(-1.0 / tau))).norm() < 1e-12);
-        // Sloshing with no hold at all: the tip rides the flow, d = integral of u (a sine's
-        // integral; sampled at 120 Hz, linear interpolation misses by t dt^2 U w^2 / 12, about
-        // 0.2 % of U / w by 0.3 s).
+        // A flow growing linearly, u = a t, under a constant partial hold s: kappa = s / tau,
+        // d = (a / kappa) (t - (1 - e^(-kappa t)) / kappa); a hold of 1e-7 takes the series
+        // (kappa dt < 1e-4): d = a t^2 / 2 - kappa a t^3 / 6 + ...
+        const Vec3d a(0.02, 0.01, 0);
+        const SurfaceFlowHistory ramp = syntheticHistory(0.05, 1.0, [&](double t) { return a * t; }, {},
+                                                         [](double) { return 1000.0; });
+        for (double s : {0.5, 1e-7})
+            for (double t : {0.3, 1.0}) {
+                const double kappa = s / tau;
+                const double expected = s > 1e-3 ? (t - (1 - std::exp(-kappa * t)) / kappa) / kappa
+                                                 : t * t / 2 - kappa * t * t * t / 6;
+                INFO("hold " << s << ", t = " << t);
+                REQUIRE((ramp.carriedOffset(site, n, -1, tau, t, [s](double) { return s; }) - a * expected).norm() <
+                        1e-12);
+            }
+        // Before the field first holds a tip there is no spike to carry: a field that holds
+        // only from the sample at 0.5 s on starts the offset at 0 at the sample before it
+        // (the interval [0.45, 0.5] at the mean rate 1 / (2 tau), then 1 / tau).
+        const SurfaceFlowHistory late = syntheticHistory(0.05, 1.0, [&](double) { return u; }, {},
+                                                         [](double t) { return t < 0.475 ? 1000.0 : 10000.0; });
+        auto full = [](double M) { return M > 5000 ? 1.0 : 0.0; };
+        REQUIRE(late.carriedOffset(site, n, -1, tau, 0.4, full).norm() == 0);
+        const double k1 = 0.5 / tau, d05 = (1 - std::exp(-k1 * 0.05)) / k1;
+        for (double t : {0.7, 1.0}) {
+            const double expected = d05 * std::exp(-(t - 0.5) / tau) + tau * (1 - std::exp(-(t - 0.5) / tau));
+            INFO("t = " << t);
+            REQUIRE((late.carriedOffset(site, n, -1, tau, t, full) - u * expected).norm() < 1e-12);
+        }
+        // Sloshing once the field has let go (it held only at the first sample): the tip
+        // rides the flow, d = integral of u (a sine's integral; sampled at 120 Hz, linear
+        // interpolation misses by t dt^2 U w^2 / 12, about 0.2 % of U / w by 0.3 s).
         const double U = 0.02, w = 2 * kPi / 0.5;
         const SurfaceFlowHistory slosh = syntheticHistory(1.0 / 120, 1.0, [&](double t) { return Vec3d(U * std::sin(w * t), 0, 0); },
-                                                          {}, [](double) { return 1000.0; });
+                                                          {}, [](double t) { return t < 1e-9 ? 10000.0 : 1000.0; });
         for (double t : {0.3, 0.55, 0.9}) {
             const double exact = U / w * (1 - std::cos(w * t));
             INFO("t = " << t);
-            REQUIRE(std::abs(slosh.carriedOffset(site, n, -1, tau, t, [](double) { return 0.0; }).x() - exact) <
-                    0.005 * U / w);
+            REQUIRE(std::abs(slosh.carriedOffset(site, n, -1, tau, t, full).x() - exact) < 0.005 * U / w);
         }
     }
     SECTION("samples after t do not count")

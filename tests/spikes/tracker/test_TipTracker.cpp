@@ -240,7 +240,9 @@ TEST_CASE("matchTips compares each tip's move with the surface velocity under it
     for (auto& s : footed) s.base = s.position - Vec3d(0, 0, s.height), s.hasBase = true;
     std::vector<SpikeTipSample> swung = footed;
     for (auto& s : swung) s.base += u * dt, s.position += u * dt + Vec3d(0.3 * kSpacing, 0, 0);
-    REQUIRE(matchTips(footed, swung, 0.5, 0.25, true, dt).flowMismatch < 1e-9);
+    const TipFrameMatch feet = matchTips(footed, swung, 0.5, 0.25, true, dt);
+    REQUIRE(feet.flowTips > 40);
+    REQUIRE(feet.flowMismatch < 1e-9);
     // Without an interval, or without velocities, nothing is compared.
     REQUIRE(matchTips(a, moved(1.0)).flowTips == 0);
     std::vector<SpikeTipSample> still = a;
