@@ -130,7 +130,7 @@ namespace {
 // from it while the next is less than two spacings higher), so a droplet above the heap does
 // not count (-inf when no particle is that close). Only its change between two frames is
 // used. Measured on the slosh bench's collapse (frames 45-56), the pattern's spacing keeps
-// within 4.51-4.71 mm with it; twice the mean over the whole column (all its particles, not
+// within 4.51-4.75 mm with it; twice the mean over the whole column (all its particles, not
 // the top one) gave 4.51-4.82 mm, and the mean of the top layer 4.56-4.92 mm.
 double heightAlong(const std::vector<Vec3d>& particles, const Vec3d& x, const Vec3d& n, double radius, double spacing)
 {
