@@ -163,6 +163,22 @@ std::function<Vec3d(const Vec3d&)> particleFieldOf(const ParticleTable& particle
     return [evaluator](const Vec3d& p) { return evaluator->inducedField(p); };
 }
 
+// The x, y, z columns of a particle table read from `path`, every one finite. Throws
+// SpikeInputError naming the file (a missing column, a non-finite position).
+std::vector<Vec3> finitePositions(const ParticleTable& table, const std::string& path)
+{
+    std::vector<Vec3> x;
+    try {
+        x = table.vec3("x", "y", "z");
+    } catch (const ParticleFileError& e) {
+        throw SpikeInputError(path + ": " + e.what());
+    }
+    for (size_t i = 0; i < x.size(); ++i)
+        if (!x[i].allFinite())
+            throw SpikeInputError(path + ": particle " + std::to_string(i) + " has a non-finite position");
+    return x;
+}
+
 // The frame's particles (a non-empty table read from particlePath) into in.particles:
 // positions [m], spacing (header, else the fluid's) [m] and |M| [A/m] per particle (the mx,
 // my, mz columns, else the fluid's law in the magnets' field), and with those columns (and
@@ -171,11 +187,8 @@ std::function<Vec3d(const Vec3d&)> particleFieldOf(const ParticleTable& particle
 void loadParticles(const SpikeScene& scene, const ParticleTable& particles, const std::string& particlePath,
                    SpikeInput& in)
 {
+    const std::vector<Vec3> x = finitePositions(particles, particlePath);
     try {
-        const std::vector<Vec3> x = particles.vec3("x", "y", "z");
-        for (size_t i = 0; i < x.size(); ++i)
-            if (!x[i].allFinite())
-                throw SpikeInputError(particlePath + ": particle " + std::to_string(i) + " has a non-finite position");
         in.particles.positions.reserve(x.size());
         for (const Vec3& p : x) in.particles.positions.push_back(p.cast<double>());
         in.particles.spacing = particles.commentNumber("spacing", in.fluid.particleSpacing);
@@ -316,25 +329,17 @@ std::function<std::shared_ptr<const std::vector<Vec3d>>(double)> pastParticleRea
         Positions result;
         const std::string path = framePath(pattern, frame);
         if (std::filesystem::exists(path)) {
+            ParticleTable table;
             try {
-                const ParticleTable table = readParticleFile(path);
-                std::vector<Vec3> x;
-                try {
-                    x = table.vec3("x", "y", "z");
-                } catch (const ParticleFileError& e) {
-                    throw ParticleFileError(path + ": " + e.what());
-                }
-                auto positions = std::make_shared<std::vector<Vec3d>>();
-                positions->reserve(x.size());
-                for (size_t i = 0; i < x.size(); ++i) {
-                    if (!x[i].allFinite())
-                        throw ParticleFileError(path + ": particle " + std::to_string(i) + " has a non-finite position");
-                    positions->push_back(x[i].cast<double>());
-                }
-                result = std::move(positions);
+                table = readParticleFile(path);
             } catch (const ParticleFileError& e) {
                 throw SpikeInputError(e.what());
             }
+            const std::vector<Vec3> x = finitePositions(table, path);
+            auto positions = std::make_shared<std::vector<Vec3d>>();
+            positions->reserve(x.size());
+            for (const Vec3& p : x) positions->push_back(p.cast<double>());
+            result = std::move(positions);
         }
         (*cache)[frame] = result;
         return result;

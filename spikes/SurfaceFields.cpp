@@ -155,16 +155,16 @@ double heightAlong(const std::vector<Vec3d>& particles, const Vec3d& x, const Ve
 double SurfaceFields::fieldHistoryPeak(const Vec3d& x, const Vec3d& n, const Vec3d& H) const
 {
     if (in_.pastMagnets.size() < 2) return H.norm();
+    const double now = magnetField(in_.pastMagnets[0], x).norm();
     size_t strongest = 0;
-    double peak = 0;
-    for (size_t k = 0; k < in_.pastMagnets.size(); ++k) {
+    double peak = now;
+    for (size_t k = 1; k < in_.pastMagnets.size(); ++k) {
         const double h = magnetField(in_.pastMagnets[k], x).norm();
         if (h > peak) {
             peak = h;
             strongest = k;
         }
     }
-    const double now = magnetField(in_.pastMagnets[0], x).norm();
     if (strongest > 0 && in_.pastParticles && spacing_ > 0 && !in_.particles.positions.empty()) {
         // Where the surface stood at the peak: x moved by the fluid's height change since.
         const auto then = in_.pastParticles(in_.time - double(strongest) * in_.lookbackStep);

@@ -124,7 +124,7 @@ double enclosedVolume(const TriangleMesh& mesh) {
     return sixTimes / 6.0;
 }
 
-std::vector<Vec3d> areaWeightedNormals(const TriangleMesh& mesh) {
+std::vector<Vec3d> vertexAreaVectors(const TriangleMesh& mesh) {
     std::vector<Vec3d> sum(mesh.vertices.size(), Vec3d::Zero());
     for (const auto& t : mesh.triangles) {
         const Vec3d a = mesh.vertices[t[0]].cast<double>();
@@ -133,6 +133,11 @@ std::vector<Vec3d> areaWeightedNormals(const TriangleMesh& mesh) {
         const Vec3d n = (b - a).cross(c - a); // length = twice the area: area weighting
         for (uint32_t i : t) sum[i] += n;
     }
+    return sum;
+}
+
+std::vector<Vec3d> areaWeightedNormals(const TriangleMesh& mesh) {
+    std::vector<Vec3d> sum = vertexAreaVectors(mesh);
     for (Vec3d& n : sum) {
         const double len = n.norm();
         // A vertex in no triangle (or only degenerate ones) has no direction; +z keeps the

@@ -52,6 +52,9 @@ TriangleMesh readMesh(const std::string& path);
 double meanEdgeLength(const TriangleMesh& mesh);
 /// Signed enclosed volume [m^3] (divergence theorem); positive for an outward-oriented closed mesh.
 double enclosedVolume(const TriangleMesh& mesh);
+/// Per vertex, the sum of (b - a) x (c - a) over its triangles (a, b, c in order): twice the
+/// vector area of the triangles around it, along their area-weighted normal.
+std::vector<Vec3d> vertexAreaVectors(const TriangleMesh& mesh);
 /// Area-weighted unit vertex normals from the triangles (outward for counter-clockwise
 /// triangles), in double precision; +z for a vertex in no triangle with area.
 std::vector<Vec3d> areaWeightedNormals(const TriangleMesh& mesh);

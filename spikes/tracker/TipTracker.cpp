@@ -59,18 +59,14 @@ std::vector<SpikeTipSample> findTips(const TriangleMesh& spiky, const TriangleMe
     // shifted along the lean, so its volume's centroid lies on its axis: the axis runs from
     // the apex through that centroid (the columns between the surface and the mesh, at their
     // mid-height, weighted by height times the area seen along the normal).
+    // The area seen along the normal weighs each column (twice it: a constant factor cancels).
+    const std::vector<Vec3d> vectorArea = vertexAreaVectors(spiky);
     std::vector<std::vector<uint32_t>> ring(n);
-    std::vector<Vec3d> vectorArea(n, Vec3d::Zero());
-    for (const auto& t : spiky.triangles) {
-        const Vec3d a = spiky.vertices[t[0]].cast<double>(), b = spiky.vertices[t[1]].cast<double>(),
-                    c = spiky.vertices[t[2]].cast<double>();
-        const Vec3d third = (b - a).cross(c - a) / 6.0;
+    for (const auto& t : spiky.triangles)
         for (int k = 0; k < 3; ++k) {
-            vectorArea[t[size_t(k)]] += third;
             ring[t[size_t(k)]].push_back(t[size_t((k + 1) % 3)]);
             ring[t[size_t(k)]].push_back(t[size_t((k + 2) % 3)]);
         }
-    }
     std::vector<char> seen(n, 0);
     std::vector<uint32_t> visited, stack;
     // Within 0.75 of the median tip spacing of the apex along the surface (0 with one tip: no
