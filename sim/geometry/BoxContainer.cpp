@@ -1,4 +1,5 @@
 // The box container: an axis-aligned box, walls sampled on one lattice, constrain() a clamp.
+// With periodic sides only the floor (and a lid) are walls: x and y wrap (PeriodicDomain).
 #include "sim/geometry/ContainerKinds.hpp"
 
 #include <vector>
@@ -9,8 +10,8 @@ namespace {
 
 class BoxContainer final : public Container {
 public:
-    BoxContainer(const Vec3d& lo, const Vec3d& hi, bool closedTop)
-        : lo_(lo), hi_(hi), closedTop_(closedTop) {
+    BoxContainer(const Vec3d& lo, const Vec3d& hi, bool closedTop, bool periodicSides)
+        : lo_(lo), hi_(hi), closedTop_(closedTop), periodic_(periodicSides) {
         for (int a = 0; a < 3; ++a) {
             loF_[a] = inwardLo(lo[a]);
             hiF_[a] = inwardHi(hi[a]);
@@ -19,6 +20,7 @@ public:
 
     std::vector<Vec3> sampleWalls(double spacing, double offset) const override {
         checkSpacing(spacing);
+        if (periodic_) return sampleFloorAndLid(spacing, offset);
         const Vec3d lo = lo_ - Vec3d::Constant(offset);
         const Vec3d hi = hi_ + Vec3d(offset, offset, closedTop_ ? offset : 0.0);
         const Vec3d ext = hi - lo;
@@ -51,15 +53,22 @@ public:
     }
 
     bool contains(const Vec3d& p, double margin) const override {
-        for (int a = 0; a < 3; ++a)
+        for (int a = 0; a < 3; ++a) {
+            // A periodic side is no wall: no margin, and a particle a little past the face
+            // (wrapped at the next neighbour search) is still in.
+            if (periodic_ && a < 2) {
+                if (!std::isfinite(p[a])) return false;
+                continue;
+            }
             if (!(p[a] >= lo_[a] + margin && p[a] <= hi_[a] - margin)) return false;
+        }
         return true;
     }
 
     bool constrain(const Vec3& xOld, Vec3& x, Vec3& v) const override {
         if (parkIfNonFinite(xOld, x, v)) return true;
         bool corrected = false;
-        for (int a = 0; a < 3; ++a) corrected |= clampAxis(x[a], v[a], loF_[a], hiF_[a]);
+        for (int a = periodic_ ? 2 : 0; a < 3; ++a) corrected |= clampAxis(x[a], v[a], loF_[a], hiF_[a]);
         return corrected;
     }
 
@@ -69,15 +78,31 @@ public:
     }
 
 private:
+    // Periodic sides: the floor (and lid) lattice over [lo, hi) in x and y with a whole number
+    // of steps per period, so that it tiles across the glued faces without seam or double.
+    std::vector<Vec3> sampleFloorAndLid(double spacing, double offset) const {
+        const Vec3d ext = hi_ - lo_;
+        const long nx = std::max(1L, std::lround(ext.x() / spacing)), ny = std::max(1L, std::lround(ext.y() / spacing));
+        std::vector<Vec3> out;
+        for (double z : {lo_.z() - offset, hi_.z() + offset}) {
+            if (z > lo_.z() && !closedTop_) break;
+            for (long j = 0; j < ny; ++j)
+                for (long i = 0; i < nx; ++i)
+                    out.push_back(toVec3(Vec3d(lo_.x() + ext.x() * double(i) / double(nx),
+                                               lo_.y() + ext.y() * double(j) / double(ny), z)));
+        }
+        return out;
+    }
+
     Vec3d lo_, hi_;
-    bool closedTop_;
+    bool closedTop_, periodic_;
     float loF_[3], hiF_[3];
 };
 
 } // namespace
 
-std::unique_ptr<Container> makeBoxContainer(const Vec3d& lo, const Vec3d& hi, bool closedTop) {
-    return std::make_unique<BoxContainer>(lo, hi, closedTop);
+std::unique_ptr<Container> makeBoxContainer(const Vec3d& lo, const Vec3d& hi, bool closedTop, bool periodicSides) {
+    return std::make_unique<BoxContainer>(lo, hi, closedTop, periodicSides);
 }
 
 } // namespace container_detail

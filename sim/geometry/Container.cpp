@@ -42,7 +42,7 @@ std::unique_ptr<Container> makeContainer(const ContainerParams& params, const st
     case ContainerParams::Type::Box:
         if (!ordered(params.min, params.max))
             throw SceneError(where + ": container: max must exceed min on every axis");
-        return makeBoxContainer(params.min, params.max, params.closedTop);
+        return makeBoxContainer(params.min, params.max, params.closedTop, params.periodicSides);
     case ContainerParams::Type::Dish:
         if (!(params.radius > 0 && std::isfinite(params.radius)))
             throw SceneError(where + ": container.radius: must be > 0");

@@ -14,7 +14,8 @@ namespace ferro {
 namespace container_detail {
 
 std::unique_ptr<Container> makeNoneContainer();
-std::unique_ptr<Container> makeBoxContainer(const Vec3d& lo, const Vec3d& hi, bool closedTop);
+std::unique_ptr<Container> makeBoxContainer(const Vec3d& lo, const Vec3d& hi, bool closedTop,
+                                            bool periodicSides = false);
 std::unique_ptr<Container> makeDishContainer(const Vec3d& center, double radius, double height);
 /// Throws SceneError (prefixed with `where`) for an unreadable, open or empty mesh.
 std::unique_ptr<Container> makeMeshContainer(const ContainerParams& params, const std::string& where);

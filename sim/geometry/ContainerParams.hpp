@@ -14,6 +14,8 @@ struct ContainerParams {
     // box
     Vec3d min{0, 0, 0}, max{0, 0, 0}; ///< box corners [m]
     bool closedTop = false;           ///< box: sample a lid too (the top is always a hard limit)
+    bool periodicSides = false;       ///< box: x and y faces glued to the opposite ones (no side
+                                      ///< walls; sim/spatial/PeriodicDomain.hpp), for a layer without rim
     // dish: a cylinder with a floor, axis +z
     Vec3d center{0, 0, 0};            ///< centre of the dish floor [m]
     double radius = 0;                ///< inner radius [m]

@@ -181,13 +181,26 @@ MagnetizationSolver::Stats MagnetizationSolver::solve(const std::vector<Vec3>& x
     DipoleTree tree; // Auto builds the interaction lists only once it has picked Tree
     tree.setSmoothing(params_.smoothing);
     tree.setSurfaceOnset(params_.localCorrection);
+    tree.setPeriodic(period_[0], period_[1]);
     tree.build(x, volume, solver == Solver::Tree ? theta : 0.0);
     const std::vector<uint32_t>& order = tree.order();
+    // With periodic sides the tree's places include the copies (nt = 9 n): each carries its
+    // particle's field and magnetization (the magnets' field is taken at the particle, so
+    // that a copy's stays its particle's).
+    const size_t nt = tree.size();
+    std::vector<size_t> targets;
+    for (size_t k = 0; k < nt; ++k)
+        if (tree.isTarget(k)) targets.push_back(k);
+    auto sampleTargets = [&]() {
+        std::vector<size_t> s = sampleIndices(n, kErrorSamples);
+        for (size_t& k : s) k = targets[k];
+        return s;
+    };
 
-    VecX Hext(3 * n), Hs(3 * n);
-    tbb::parallel_for(tbb::blocked_range<size_t>(0, n, 1024), [&](const tbb::blocked_range<size_t>& r) {
+    VecX Hext(3 * nt), Hs(3 * nt);
+    tbb::parallel_for(tbb::blocked_range<size_t>(0, nt, 1024), [&](const tbb::blocked_range<size_t>& r) {
         for (size_t k = r.begin(); k < r.end(); ++k) {
-            const size_t i = order[k];
+            const size_t i = order[k] % n;
             Vec3d h = magnetField(magnets, x[i].cast<double>());
             if (!h.allFinite()) h.setZero();
             Hext.segment<3>(3 * k) = h;
@@ -207,7 +220,7 @@ MagnetizationSolver::Stats MagnetizationSolver::solve(const std::vector<Vec3>& x
         VecX Mext;
         magnetizationOf(Hext, chi0, Ms, Mext);
         tree.setMagnetization(Mext);
-        const std::vector<size_t> samples = sampleIndices(n, kErrorSamples);
+        const std::vector<size_t> samples = sampleTargets();
         std::vector<double> ind(samples.size()), ext(samples.size());
         tbb::parallel_for(size_t(0), samples.size(), [&](size_t s) {
             ind[s] = tree.fieldAtParticleDirect(samples[s]).squaredNorm();
@@ -245,7 +258,7 @@ MagnetizationSolver::Stats MagnetizationSolver::solve(const std::vector<Vec3>& x
             VecX Mfinal;
             magnetizationOf(Hs, chi0, Ms, Mfinal);
             tree.setMagnetization(Mfinal);
-            const std::vector<size_t> samples = sampleIndices(n, kErrorSamples);
+            const std::vector<size_t> samples = sampleTargets();
             std::vector<double> diff(samples.size()), ref(samples.size());
             tbb::parallel_for(size_t(0), samples.size(), [&](size_t s) {
                 const Eigen::Vector3d exact = tree.fieldAtParticleDirect(samples[s]);
@@ -271,8 +284,8 @@ MagnetizationSolver::Stats MagnetizationSolver::solve(const std::vector<Vec3>& x
 
     // Back to the caller's order, float.
     tbb::parallel_for(tbb::blocked_range<size_t>(0, n, 4096), [&](const tbb::blocked_range<size_t>& r) {
-        for (size_t k = r.begin(); k < r.end(); ++k) {
-            const size_t i = order[k];
+        for (size_t q = r.begin(); q < r.end(); ++q) {
+            const size_t k = targets[q], i = order[k];
             Eigen::Vector3d h = Hs.segment<3>(3 * k);
             if (!h.allFinite()) h.setZero();
             H[i] = h.cast<Real>();
@@ -298,9 +311,12 @@ void MagnetizationSolver::addMagnetGradients(const std::vector<Vec3>& x, const s
                                              std::vector<Eigen::Matrix3f>& J) {
     const size_t n = x.size();
     J.assign(n, Eigen::Matrix3f::Zero());
-    tbb::parallel_for(tbb::blocked_range<size_t>(0, n, 1024), [&](const tbb::blocked_range<size_t>& r) {
+    // A periodic tree's order holds its copies too (input index n and up): skipped.
+    const size_t places = order.empty() ? n : order.size();
+    tbb::parallel_for(tbb::blocked_range<size_t>(0, places, 1024), [&](const tbb::blocked_range<size_t>& r) {
         for (size_t k = r.begin(); k < r.end(); ++k) {
             const size_t i = order.empty() ? k : order[k];
+            if (i >= n) continue;
             Mat3d g = ferro::fieldGradient(magnets, Vec3d(x[i].cast<double>()));
             if (!g.allFinite()) g.setZero();
             Eigen::Matrix3f total = g.cast<float>();
@@ -327,6 +343,7 @@ void MagnetizationSolver::fieldGradient(const std::vector<Vec3>& x, const std::v
     DipoleTree tree;
     tree.setSmoothing(params_.smoothing);
     tree.setSurfaceOnset(params_.localCorrection);
+    tree.setPeriodic(period_[0], period_[1]);
     tree.build(x, volume, useTree ? (params_.openingAngle > 0 ? params_.openingAngle : 0.5) : 0.0);
     tree.setMagnetizationUnsorted(M);
     std::vector<Mat3f> Js;

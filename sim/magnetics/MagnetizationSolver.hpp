@@ -110,6 +110,13 @@ public:
                        std::vector<Eigen::Matrix3f>& J) const;
 
     const MagnetizationParams& params() const { return params_; }
+    /// Periodic side walls: the particles repeat with periods Lx, Ly [m] in x and y (0 = not
+    /// periodic); the particle field then sums the periodic copies (DipoleTree::setPeriodic).
+    /// The magnets' field is the scene's, taken at each particle (a uniform field is periodic).
+    void setPeriodic(double Lx, double Ly) {
+        period_[0] = Lx;
+        period_[1] = Ly;
+    }
     /// Auto uses Direct up to this many particles (where all pairs are cheaper than a tree).
     static constexpr size_t directLimit() { return 3000; }
 
@@ -122,6 +129,7 @@ private:
                                    std::vector<Eigen::Matrix3f>& J);
     MagnetizationParams params_;
     std::optional<Solver> lastSolver_; // what the last solve() ran (Auto's pick)
+    double period_[2] = {0, 0};        // setPeriodic
 };
 
 } // namespace ferro

@@ -69,6 +69,7 @@ void DipoleTree::computeSurfaceTerms() {
     tbb::parallel_for(tbb::blocked_range<size_t>(0, leaves_.size(), 4), [&](const tbb::blocked_range<size_t>& r) {
         std::vector<uint32_t> stack, ranges;
         for (size_t l = r.begin(); l < r.end(); ++l) {
+            if (!leafHasTarget(l)) continue; // periodic copies: never evaluated
             const Node& target = nodes_[leaves_[l]];
             leavesWithin(target, reach, stack, ranges);
             for (uint32_t k = target.begin; k < target.end; ++k) {
@@ -144,6 +145,7 @@ void DipoleTree::computeLocalCorrection(bool useTree) {
     tbb::parallel_for(tbb::blocked_range<size_t>(0, leaves_.size(), 4), [&](const tbb::blocked_range<size_t>& r) {
         std::vector<uint32_t> stack, ranges;
         for (size_t l = r.begin(); l < r.end(); ++l) {
+            if (!leafHasTarget(l)) continue; // periodic copies: take their particle's D below
             const Node& target = nodes_[leaves_[l]];
             leavesWithin(target, reach, stack, ranges);
             for (uint32_t k = target.begin; k < target.end; ++k) {
@@ -183,6 +185,7 @@ void DipoleTree::computeLocalCorrection(bool useTree) {
             }
         }
     });
+    copyToImages(D.data(), 9);
     localCorrection_ = std::move(D);
 }
 

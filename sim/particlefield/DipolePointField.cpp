@@ -20,7 +20,7 @@ Eigen::Vector3d DipoleTree::fieldAtParticleDirect(size_t k) const {
     const double p[3] = {px_[k], py_[k], pz_[k]};
     const Sources src{px_.data(), py_.data(), pz_.data(), mx_.data(), my_.data(), mz_.data(), a2_.data(),
                       ainv_.data()};
-    Eigen::Vector3d h = kInv4Pi * directFieldD(p, src, size(), coreOf(smoothing_));
+    Eigen::Vector3d h = kInv4Pi * directFieldD(p, src, size(), coreOf(smoothing_)) + farField_;
     addSurfaceTerm(k, h.data());
     return h;
 }
@@ -30,7 +30,7 @@ Eigen::Vector3d DipoleTree::fieldAtDirect(const Eigen::Vector3d& point) const {
     const double p[3] = {q.x(), q.y(), q.z()};
     const Sources src{px_.data(), py_.data(), pz_.data(), mx_.data(), my_.data(), mz_.data(), a2_.data(),
                       ainv_.data()};
-    return kInv4Pi * directFieldD(p, src, size(), coreOf(smoothing_));
+    return kInv4Pi * directFieldD(p, src, size(), coreOf(smoothing_)) + farField_;
 }
 
 template <class Leaf, class Cell>
@@ -64,7 +64,7 @@ Eigen::Vector3d DipoleTree::fieldAt(const Eigen::Vector3d& point) const {
         [&](uint32_t c) {
             cellSumD<FieldTerm>(p, nodes_[c].c, &cell_[size_t(c) * kCellFloats], h);
         });
-    return kInv4Pi * Eigen::Vector3d(h[0], h[1], h[2]);
+    return kInv4Pi * Eigen::Vector3d(h[0], h[1], h[2]) + farField_;
 }
 
 Mat3d DipoleTree::gradientAt(const Eigen::Vector3d& point) const {

@@ -18,6 +18,59 @@ using namespace dipole_detail;
 
 void DipoleTree::build(const std::vector<Vec3>& x, const std::vector<Real>& volume, double openingAngle,
                        int leafSize) {
+    targetCount_ = x.size();
+    farImages_.setZero();
+    if (!periodic() || x.empty()) {
+        buildFrom(x, volume, openingAngle, leafSize);
+        return;
+    }
+    // The particles, then their copies shifted by one period to every side (input i of the
+    // tree is particle i % n).
+    std::vector<Vec3> xe;
+    std::vector<Real> ve;
+    const size_t n = x.size();
+    const int reach[2] = {period_[0] > 0 ? 1 : 0, period_[1] > 0 ? 1 : 0};
+    std::vector<std::pair<int, int>> shifts{{0, 0}};
+    for (int b = -reach[1]; b <= reach[1]; ++b)
+        for (int a = -reach[0]; a <= reach[0]; ++a)
+            if (a || b) shifts.emplace_back(a, b);
+    xe.reserve(shifts.size() * n);
+    ve.reserve(shifts.size() * n);
+    for (const auto& [a, b] : shifts) {
+        const Vec3 s(Real(a * period_[0]), Real(b * period_[1]), 0);
+        for (size_t i = 0; i < n; ++i) {
+            xe.push_back(x[i] + s);
+            ve.push_back(i < volume.size() ? volume[i] : Real(0));
+        }
+    }
+    buildFrom(xe, ve, openingAngle, leafSize);
+
+    // The farther copies: each as its total moment at its centre, G(r) = (3 r r^T / r^2 - I)
+    // / (4 pi r^3) summed over the lattice out to kFar periods (the near copies are in the
+    // tree), then the continuum beyond, a sheet of moment density m / (Lx Ly) outside the
+    // radius R of a disc of the summed area: the sheet's field at the centre is -1/(2R) of
+    // the moment density along z and +1/(4R) in the plane (the mean of 3 cos^2 - 1 over
+    // the circle is 1/2).
+    constexpr int kFar = 200;
+    const int far[2] = {period_[0] > 0 ? kFar : 0, period_[1] > 0 ? kFar : 0};
+    Eigen::Matrix3d T = Eigen::Matrix3d::Zero();
+    for (int b = -far[1]; b <= far[1]; ++b)
+        for (int a = -far[0]; a <= far[0]; ++a) {
+            if (std::abs(a) <= reach[0] && std::abs(b) <= reach[1]) continue;
+            const Eigen::Vector3d r(a * period_[0], b * period_[1], 0);
+            const double r2 = r.squaredNorm(), r1 = std::sqrt(r2);
+            T += (3.0 * r * r.transpose() / r2 - Eigen::Matrix3d::Identity()) / (4.0 * kPi * r2 * r1);
+        }
+    if (period_[0] > 0 && period_[1] > 0) {
+        const double area = period_[0] * period_[1];
+        const double R = double(2 * kFar + 1) * std::sqrt(area / kPi);
+        T += Eigen::Vector3d(1.0 / (4.0 * R), 1.0 / (4.0 * R), -1.0 / (2.0 * R)).asDiagonal() * (1.0 / area);
+    }
+    farImages_ = T;
+}
+
+void DipoleTree::buildFrom(const std::vector<Vec3>& x, const std::vector<Real>& volume, double openingAngle,
+                           int leafSize) {
     const size_t n = x.size();
     theta_ = openingAngle > 0 ? std::clamp(openingAngle, 0.05, 1.0) : 0.0;
     leafSize = std::max(leafSize, 1);
@@ -94,6 +147,20 @@ void DipoleTree::build(const std::vector<Vec3>& x, const std::vector<Real>& volu
         std::sort(leaves_.begin(), leaves_.end(),
                   [&](uint32_t a, uint32_t b) { return nodes_[a].begin < nodes_[b].begin; });
         for (uint32_t l : leaves_) leafBegin_.push_back(nodes_[l].begin);
+    }
+    sourceSlot_.clear();
+    leafHasTarget_.clear();
+    if (targetCount_ < n) { // periodic copies: where each place's particle sits, which leaves hold one
+        std::vector<uint32_t> slotOf(targetCount_);
+        for (size_t k = 0; k < n; ++k)
+            if (order_[k] < targetCount_) slotOf[order_[k]] = uint32_t(k);
+        sourceSlot_.resize(n);
+        for (size_t k = 0; k < n; ++k) sourceSlot_[k] = slotOf[order_[k] % targetCount_];
+        leafHasTarget_.assign(leaves_.size(), 0);
+        for (size_t l = 0; l < leaves_.size(); ++l) {
+            const Node& node = nodes_[leaves_[l]];
+            for (uint32_t k = node.begin; k < node.end && !leafHasTarget_[l]; ++k) leafHasTarget_[l] = order_[k] < targetCount_;
+        }
     }
     cell_.assign(nodes_.size() * kCellFloats, 0.0f);
     farStart_.assign(1, 0);
@@ -202,6 +269,7 @@ void DipoleTree::buildInteractionLists() {
     tbb::parallel_for(tbb::blocked_range<size_t>(0, L, 8), [&](const tbb::blocked_range<size_t>& r) {
         std::vector<uint32_t> stack;
         for (size_t l = r.begin(); l < r.end(); ++l) {
+            if (!leafHasTarget(l)) continue; // periodic copies only: never evaluated
             const Node& target = nodes_[leaves_[l]];
             auto& f = far[l];
             auto& nr = near[l];
@@ -269,7 +337,7 @@ void DipoleTree::setMagnetization(const Eigen::VectorXd& M) {
 void DipoleTree::setMagnetizationUnsorted(const std::vector<Vec3>& M) {
     const size_t n = size();
     for (size_t k = 0; k < n; ++k) {
-        const size_t i = order_[k];
+        const size_t i = targetCount_ > 0 ? order_[k] % targetCount_ : order_[k];
         const Vec3 m = i < M.size() && M[i].allFinite() ? M[i] : Vec3::Zero();
         mx_[k] = vol_[k] * m.x();
         my_[k] = vol_[k] * m.y();
@@ -307,6 +375,13 @@ void DipoleTree::sumCellMoments() {
     tbb::parallel_for(tbb::blocked_range<size_t>(0, nn, 256), [&](const tbb::blocked_range<size_t>& r) {
         for (size_t i = r.begin(); i < r.end(); ++i) raw[i].storeTraceFree(&cell_[i * kCellFloats]);
     });
+    farField_.setZero();
+    if (periodic()) { // the far copies' uniform field: one period's moment sum V M (the targets), SI
+        Eigen::Vector3d m = Eigen::Vector3d::Zero();
+        for (size_t k = 0; k < size(); ++k)
+            if (isTarget(k)) m += Eigen::Vector3d(mx_[k], my_[k], mz_[k]);
+        farField_ = farImages_ * (scale_ * scale_ * scale_ * m);
+    }
 }
 
 void DipoleTree::gatherFar(size_t leaf, std::vector<float>& buf, size_t& count) const {
@@ -337,6 +412,7 @@ void DipoleTree::forEachTreeTarget(Visit&& visit) const {
     tbb::parallel_for(tbb::blocked_range<size_t>(0, leaves_.size(), 4), [&](const tbb::blocked_range<size_t>& r) {
         std::vector<float> buf;
         for (size_t l = r.begin(); l < r.end(); ++l) {
+            if (!leafHasTarget(l)) continue;
             size_t farCount = 0;
             gatherFar(l, buf, farCount);
             const Node& node = nodes_[leaves_[l]];
@@ -363,6 +439,10 @@ void DipoleTree::fieldAtParticles(Eigen::VectorXd& H, bool useTree) const {
         forEachTreeTarget([&](size_t l, size_t k, const std::vector<float>& buf, size_t farCount) {
             treeFieldAt(l, k, buf, farCount, &H[3 * k]);
         });
+        if (periodic()) {
+            addFarImages(H.data());
+            copyToImages(H.data(), 3);
+        }
         return;
     }
     const size_t blocks = (n + kDirectTargetBlock - 1) / kDirectTargetBlock;
@@ -372,15 +452,40 @@ void DipoleTree::fieldAtParticles(Eigen::VectorXd& H, bool useTree) const {
             for (size_t sb = 0; sb < n; sb += kDirectChunk) {
                 const size_t se = std::min(n, sb + kDirectChunk);
                 for (size_t k = tb; k < te; ++k) {
+                    if (!isTarget(k)) continue;
                     const float t[3] = {px_[k], py_[k], pz_[k]};
                     float acc[3] = {0, 0, 0};
                     FieldTerm::addParticles(coreOf(smoothing_), t, src, sb, se, acc);
                     for (int a = 0; a < 3; ++a) H[3 * k + a] += kInv4Pi * double(acc[a]);
                 }
             }
-            for (size_t k = tb; k < te; ++k) addSurfaceTerm(k, &H[3 * k]);
+            for (size_t k = tb; k < te; ++k)
+                if (isTarget(k)) addSurfaceTerm(k, &H[3 * k]);
         }
     });
+    if (periodic()) {
+        addFarImages(H.data());
+        copyToImages(H.data(), 3);
+    }
+}
+
+template <class T>
+void DipoleTree::copyToImages(T* values, int stride) const {
+    if (sourceSlot_.empty()) return;
+    tbb::parallel_for(tbb::blocked_range<size_t>(0, size(), 8192), [&](const tbb::blocked_range<size_t>& r) {
+        for (size_t k = r.begin(); k < r.end(); ++k) {
+            const size_t s = sourceSlot_[k];
+            if (s != k)
+                for (int a = 0; a < stride; ++a) values[size_t(stride) * k + a] = values[size_t(stride) * s + a];
+        }
+    });
+}
+
+void DipoleTree::addFarImages(double* H) const {
+    const Eigen::Vector3d& h = farField_;
+    for (size_t k = 0; k < size(); ++k)
+        if (isTarget(k))
+            for (int a = 0; a < 3; ++a) H[3 * k + a] += h[a];
 }
 
 void DipoleTree::fieldAtParticlesDirect(const std::vector<uint32_t>& targets, Eigen::VectorXd& H) const {
@@ -415,10 +520,12 @@ void DipoleTree::gradientAtParticles(std::vector<Mat3f>& J, bool useTree) const 
             treeSum<GradientTerm>(l, k, buf, farCount, g);
             J[k] = symmetric(g, s);
         });
+        copyToImages(J.data()->data(), 9);
         return;
     }
     tbb::parallel_for(tbb::blocked_range<size_t>(0, n, 16), [&](const tbb::blocked_range<size_t>& r) {
         for (size_t k = r.begin(); k < r.end(); ++k) {
+            if (!isTarget(k)) continue;
             const float t[3] = {px_[k], py_[k], pz_[k]};
             double gd[6] = {0, 0, 0, 0, 0, 0};
             for (size_t sb = 0; sb < n; sb += kDirectChunk) {
@@ -430,6 +537,7 @@ void DipoleTree::gradientAtParticles(std::vector<Mat3f>& J, bool useTree) const 
             J[k] = symmetric(g, s);
         }
     });
+    copyToImages(J.data()->data(), 9);
 }
 
 size_t DipoleTree::leafOf(size_t k) const {
@@ -445,7 +553,10 @@ Eigen::Vector3d DipoleTree::fieldAtParticleTree(size_t k) const {
     gatherFar(l, buf, fc);
     double h[3];
     treeFieldAt(l, k, buf, fc, h);
-    return Eigen::Vector3d(h[0], h[1], h[2]);
+    return Eigen::Vector3d(h[0], h[1], h[2]) + farField_;
 }
+
+template void DipoleTree::copyToImages<float>(float*, int) const;
+template void DipoleTree::copyToImages<double>(double*, int) const;
 
 } // namespace ferro

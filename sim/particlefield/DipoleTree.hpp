@@ -34,6 +34,25 @@ public:
     /// the model before the local correction); takes effect at the next build().
     void setSurfaceOnset(bool on) { surfaceOnset_ = on; }
     double smoothing() const { return smoothing_; }
+    /// Periodic side walls (container.periodic_sides) for the next build(): the particles
+    /// repeat with periods Lx, Ly [m] in x and y (0 = that axis is not periodic). build()
+    /// then adds the eight neighbouring copies of the particles to the tree, and the field at
+    /// the particles sums those exactly (tree or all pairs) plus every farther copy as the
+    /// copy's total moment at its centre, out to 200 periods, and the continuum beyond (the
+    /// 2D lattice sum of dipoles converges absolutely: the far copies shift the field by
+    /// about thickness / (3 L) of M). Evaluations then cover the copies as well: size() is
+    /// 9 n (3 n with one periodic axis), sorted place k holds input particle order()[k] % n,
+    /// the copies' values are their particle's (setMagnetization must give a copy its
+    /// particle's M, as a field-driven M does); only the n particles are evaluated.
+    void setPeriodic(double Lx, double Ly) {
+        period_[0] = Lx > 0 ? Lx : 0.0;
+        period_[1] = Ly > 0 ? Ly : 0.0;
+    }
+    bool periodic() const { return period_[0] > 0 || period_[1] > 0; }
+    /// The input particles of the last build() (size() without the periodic copies).
+    size_t targetCount() const { return targetCount_; }
+    /// Sorted place k is an input particle, not a periodic copy.
+    bool isTarget(size_t k) const { return order_[k] < targetCount_; }
 
     /// Sorts the particles at x [m] with volumes [m^3] (negative or non-finite volumes count
     /// as 0, i.e. a particle without moment) and builds the octree. With openingAngle > 0
@@ -109,6 +128,7 @@ private:
         float maxA = 0;                // largest particle radius in the cell, scaled
         float lo[3] = {0, 0, 0}, hi[3] = {0, 0, 0}; // box of the particle centres, scaled
     };
+    void buildFrom(const std::vector<Vec3>& x, const std::vector<Real>& volume, double openingAngle, int leafSize);
     void fillNode(uint32_t index, uint32_t begin, uint32_t end, int level, const std::vector<uint64_t>& codes);
     void finishNode(Node& n) const;
     void buildInteractionLists();
@@ -134,6 +154,18 @@ private:
     template <class Leaf, class Cell>
     void traverse(const Eigen::Vector3d& q, Leaf&& leaf, Cell&& cell) const;
     size_t leafOf(size_t k) const;
+    // Periodic copies: every non-target place takes its particle's value (stride floats or
+    // doubles a place); the far copies' uniform field.
+    template <class T>
+    void copyToImages(T* values, int stride) const;
+    void addFarImages(double* H) const;
+    bool leafHasTarget(size_t l) const { return leafHasTarget_.empty() || leafHasTarget_[l]; }
+    double period_[2] = {0, 0};
+    size_t targetCount_ = 0;
+    std::vector<uint32_t> sourceSlot_;   // periodic: sorted place of each place's particle
+    std::vector<char> leafHasTarget_;    // periodic: leaf holds an input particle
+    Eigen::Matrix3d farImages_ = Eigen::Matrix3d::Zero(); // H = farImages_ * (sum over one period of V M) [1/m^3]
+    Eigen::Vector3d farField_ = Eigen::Vector3d::Zero();  // the far copies' field of the set magnetization [A/m]
 
     double scale_ = 1;      // length unit of the internal coordinates [m]
     Eigen::Vector3d origin_{0, 0, 0}; // origin of the internal coordinates [m]

@@ -113,6 +113,7 @@ ContainerParams parseContainer(const SceneDocument& doc)
         p.type = ContainerParams::Type::Box;
         r.box("min", "max", p.min, p.max);
         p.closedTop = r.boolean("closed_top", p.closedTop);
+        p.periodicSides = r.boolean("periodic_sides", p.periodicSides);
     } else if (type == "dish") {
         p.type = ContainerParams::Type::Dish;
         p.center = r.vec3("center", p.center);

@@ -82,6 +82,7 @@ void DfsphSolver::computeFactors() {
     const std::vector<Real>& bVolume = sim_.boundaryVolumes();
     const std::vector<Vec3>& x = sim_.positions();
     const std::vector<Vec3>& bx = sim_.boundaryPositions();
+    const PeriodicDomain& periodic = sim_.periodic();
     const double h = sim_.supportRadius();
     alpha_.resize(sim_.size());
     forEachParticle(sim_.size(), [&](size_t i) {
@@ -90,13 +91,13 @@ void DfsphSolver::computeFactors() {
         Vec3 fluid = Vec3::Zero(), wall = Vec3::Zero();
         Real sum2 = 0;
         for (uint32_t k = fluidNbr.begin(i); k < fluidNbr.end(i); ++k) {
-            const Vec3 g = (V * fluidNbr.gradFactor[k]) * (x[i] - x[fluidNbr.index[k]]);
+            const Vec3 g = (V * fluidNbr.gradFactor[k]) * periodic.offset(x[i] - x[fluidNbr.index[k]]);
             fluid += g;
             sum2 += g.squaredNorm();
         }
         for (uint32_t k = boundaryNbr.begin(i); k < boundaryNbr.end(i); ++k) {
             const uint32_t b = boundaryNbr.index[k];
-            wall += (bVolume[b] * boundaryNbr.gradFactor[k]) * (x[i] - bx[b]);
+            wall += (bVolume[b] * boundaryNbr.gradFactor[k]) * periodic.offset(x[i] - bx[b]);
         }
         const Real denom = (fluid + wall).dot(fluid + FluidSimulation::kWallMirror * wall) + sum2;
         alpha_[i] = denom > Real(1e-6) * Real(1 / (h * h)) ? 1 / denom : 0;

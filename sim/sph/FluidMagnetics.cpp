@@ -33,7 +33,12 @@ FluidMagnetics::FluidMagnetics(const SimScene& scene, double particleVolume, dou
     : tracks_(scene.magnets), law_(scene.magnetization), volume_(particleVolume), spacing_(spacing),
       rho0_(scene.fluid.restDensity), gravity_(scene.solver.gravity.norm()),
       curve_(scene.magnetization.susceptibility, scene.magnetization.saturation) {
-    if (active() && magnetic()) solver_ = std::make_unique<MagnetizationSolver>(law_);
+    if (active() && magnetic()) {
+        solver_ = std::make_unique<MagnetizationSolver>(law_);
+        const ContainerParams& c = scene.container;
+        if (c.type == ContainerParams::Type::Box && c.periodicSides) // the layer's periodic copies
+            solver_->setPeriodic(c.max.x() - c.min.x(), c.max.y() - c.min.y());
+    }
     // The surface model's scales from a flat cubic lattice surface (the seed's lattice,
     // support 2 spacings as FluidSimulation uses): |grad c| of the top layer and the
     // column sum kappa = sum_layers w V |grad c| / s^2.

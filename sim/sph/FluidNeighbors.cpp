@@ -53,6 +53,9 @@ void FluidSimulation::searchCandidates() {
     // Cells as wide as the search radius, so that the 3 x 3 x 3 stencil holds every
     // candidate within the support plus the skin.
     const Real radius = Real(h_ + skin_);
+    // Periodic sides: back into the box (pair offsets take the nearest image anyway; the
+    // grid and the image queries below need the box).
+    if (periodic_.active()) forEachParticle(n, [&](size_t i) { periodic_.wrap(x_[i]); });
     grid_.sort(x_, id_, radius, order_);
     permute(x_, order_);
     permute(v_, order_);
@@ -83,15 +86,27 @@ void FluidSimulation::searchCandidates() {
         tbb::parallel_for(tbb::blocked_range<size_t>(0, n, kGrain), [&](const tbb::blocked_range<size_t>& r) {
             std::vector<uint32_t> buffer(kRoom + 1);
             for (size_t i = r.begin(); i != r.end(); ++i) {
-                uint32_t cnt = gatherNeighbors(grid_, px_.data(), py_.data(), pz_.data(), x_[i], radius,
-                                               uint32_t(i), buffer.data(), kRoom);
+                // With periodic sides, a particle near a face also queries its images there
+                // (each pair is found once: the box is wider than two search radii).
+                uint32_t cnt = 0;
+                forEachImageQuery(x_[i], radius, [&](const Vec3& q) {
+                    if (cnt > kRoom) return;
+                    const uint32_t found = gatherNeighbors(grid_, px_.data(), py_.data(), pz_.data(), q, radius,
+                                                           q == x_[i] ? uint32_t(i) : uint32_t(-1), buffer.data() + cnt,
+                                                           kRoom - cnt);
+                    cnt = found > kRoom - cnt ? kRoom + 1 : cnt + found;
+                });
                 if (cnt > capacity_) overflow = true;
                 std::copy_n(buffer.data(), std::min<uint32_t>(cnt, uint32_t(capacity_)), &scratch_[i * capacity_]);
                 fluidCount[i] = cnt;
                 cnt = 0;
                 if (haveBoundary) {
-                    cnt = gatherNeighbors(bGrid_, bpx_.data(), bpy_.data(), bpz_.data(), x_[i], radius,
-                                          uint32_t(-1), buffer.data(), kRoom);
+                    forEachImageQuery(x_[i], radius, [&](const Vec3& q) {
+                        if (cnt > kRoom) return;
+                        const uint32_t found = gatherNeighbors(bGrid_, bpx_.data(), bpy_.data(), bpz_.data(), q, radius,
+                                                               uint32_t(-1), buffer.data() + cnt, kRoom - cnt);
+                        cnt = found > kRoom - cnt ? kRoom + 1 : cnt + found;
+                    });
                     if (cnt > bCapacity_) overflow = true;
                     std::copy_n(buffer.data(), std::min<uint32_t>(cnt, uint32_t(bCapacity_)), &bScratch_[i * bCapacity_]);
                 }
@@ -161,7 +176,7 @@ void FluidSimulation::updateNeighbors() {
         __m128 sum4 = _mm_setzero_ps();
         for (; k + 4 <= slots; k += 4) {
             const uint32_t* c = cand + k;
-            const PairOffsets4 d(xi, qx, qy, qz, c);
+            const PairOffsets4 d(xi, qx, qy, qz, c, periodic_);
             const __m128 r = _mm_sqrt_ps(d.r2);
             const __m128 vol = volume ? gather4(volume, c) : _mm_set1_ps(V);
             sum4 = _mm_add_ps(sum4, _mm_mul_ps(vol, kernel4.W(r)));
@@ -185,7 +200,7 @@ void FluidSimulation::updateNeighbors() {
 #endif
         for (; k < slots; ++k) {
             const uint32_t j = cand[k];
-            const Vec3 d(xi.x() - qx[j], xi.y() - qy[j], xi.z() - qz[j]);
+            const Vec3 d = periodic_.offset(Vec3(xi.x() - qx[j], xi.y() - qy[j], xi.z() - qz[j]));
             const Real r2 = d.squaredNorm();
             out[cnt] = j;
             const Real r = std::sqrt(r2);

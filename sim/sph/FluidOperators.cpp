@@ -42,13 +42,13 @@ void FluidSimulation::computeSurfaceView() {
         forEachParticle(n, [&](size_t i) {
             Vec3 fluid = Vec3::Zero(), wall = Vec3::Zero();
             for (uint32_t k = fluidNbr_.begin(i); k < fluidNbr_.end(i); ++k) {
-                const Vec3 xij = x_[i] - x_[fluidNbr_.index[k]];
+                const Vec3 xij = periodic_.offset(x_[i] - x_[fluidNbr_.index[k]]);
                 fluid += kernel_.gradW(xij, xij.norm());
             }
             fluid *= V;
             for (uint32_t k = boundaryNbr_.begin(i); k < boundaryNbr_.end(i); ++k) {
                 const uint32_t b = boundaryNbr_.index[k];
-                const Vec3 xib = x_[i] - bx_[b];
+                const Vec3 xib = periodic_.offset(x_[i] - bx_[b]);
                 wall += bVolume_[b] * kernel_.gradW(xib, xib.norm());
             }
             colorGradient_[i] = fluid + wall;
@@ -72,7 +72,7 @@ void FluidSimulation::computeSurfaceView() {
             const Vec3 out = -g / gn;
             Real covered = 0;
             for (uint32_t k = fluidNbr_.begin(i); k < fluidNbr_.end(i); ++k) {
-                const Vec3 d = x_[fluidNbr_.index[k]] - x_[i];
+                const Vec3 d = periodic_.offset(x_[fluidNbr_.index[k]] - x_[i]);
                 const Real r = d.norm();
                 if (!(r > 0) || r > 2 * s) continue;
                 const Real cosine = d.dot(out) / r;
@@ -86,7 +86,7 @@ void FluidSimulation::computeSurfaceView() {
 }
 
 void FluidSimulation::computeAccelerations(const Real* pOverRho2) {
-    const PairForceView view{x_, v_, rho_, px_.data(), py_.data(), pz_.data(), fluidNbr_, boundaryNbr_, bx_, bVolume_, kernel_};
+    const PairForceView view{x_, v_, rho_, px_.data(), py_.data(), pz_.data(), fluidNbr_, boundaryNbr_, bx_, bVolume_, kernel_, periodic_};
     const SweepConstants k{scene_.solver.gravity.cast<Real>(), Real(mass_), Real(rho0_), kWallMirror};
     pairForces_->accelerations(view, k, pOverRho2, a_);
     if (magnetics_) magnetics_->addKelvinAcceleration(a_);
@@ -109,6 +109,10 @@ PressureSweepInput FluidSimulation::sweepInput() const {
     in.wallVolume = bVolume_.data();
     in.volume = Real(volume_);
     in.wallMirror = kWallMirror;
+    for (int a = 0; a < 2; ++a) {
+        in.period[a] = periodic_.period[a];
+        in.inverse[a] = periodic_.inverse[a];
+    }
     return in;
 }
 

@@ -51,6 +51,15 @@ FluidSimulation::FluidSimulation(const SimScene& scene)
     p_.assign(n, 0);
 
     createPressureSolver();
+    if (scene_.container.type == ContainerParams::Type::Box && scene_.container.periodicSides) {
+        periodic_ = PeriodicDomain::horizontal(scene_.container.min.cast<Real>(), scene_.container.max.cast<Real>());
+        // One image of a neighbour at most (PeriodicDomain's contract), with room to spare.
+        const double least = 2 * (h_ + skin_) + 4 * spacing_;
+        for (int a = 0; a < 2; ++a)
+            if (!(periodic_.period[a] > least))
+                throw SceneError(scene_.path + ": container.periodic_sides: the box must be wider than " +
+                                 std::to_string(least) + " m (2 supports + skin + 4 spacings) in x and y");
+    }
     sampleBoundary();
     chooseSpeedScales();
     setUpPairForces();
@@ -111,11 +120,13 @@ void FluidSimulation::sampleBoundary() {
     const Real h2 = Real(h_ * h_);
     forEachParticle(bx_.size(), [&](size_t b) {
         Real sum = 0;
-        bGrid_.forEachCandidateRange(bx_[b], [&](uint32_t beg, uint32_t end) {
-            for (uint32_t k = beg; k < end; ++k) {
-                const Real r2 = (bx_[b] - bx_[k]).squaredNorm();
-                if (r2 < h2) sum += kernel_.W(std::sqrt(r2));
-            }
+        forEachImageQuery(bx_[b], Real(h_), [&](const Vec3& q) {
+            bGrid_.forEachCandidateRange(q, [&](uint32_t beg, uint32_t end) {
+                for (uint32_t k = beg; k < end; ++k) {
+                    const Real r2 = (q - bx_[k]).squaredNorm();
+                    if (r2 < h2) sum += kernel_.W(std::sqrt(r2));
+                }
+            });
         });
         bVolume_[b] = wallScale / sum;
     });
@@ -240,6 +251,7 @@ ViscosityOperatorInput FluidSimulation::viscosityOperator() const {
     in.boundaryPositions = &bx_;
     in.boundaryVolumes = &bVolume_;
     in.kernel = kernel_;
+    in.periodic = periodic_;
     in.supportRadius = h_;
     in.particleMass = mass_;
     in.restDensity = rho0_;

@@ -17,6 +17,7 @@
 #include "sim/sph/Kernel.hpp"
 #include "sim/sph/MagnetObstacles.hpp"
 #include "sim/spatial/NeighborSearch.hpp"
+#include "sim/spatial/PeriodicDomain.hpp"
 #include "sim/sph/PressureSolver.hpp"
 #include "sim/sph/SanityGuard.hpp"
 #include "sim/sph/sweeps/PressureSweeps.hpp"
@@ -157,6 +158,9 @@ public:
 
     // Sorted-order access for diagnostics and tests.
     const std::vector<Vec3>& positions() const { return x_; }
+    /// The periodic sides (inactive unless container.periodic_sides): pair offsets x_i - x_j
+    /// and x_i - x_b must go through periodic().offset().
+    const PeriodicDomain& periodic() const { return periodic_; }
     const std::vector<Vec3>& velocities() const { return v_; }
     const std::vector<Real>& densities() const { return rho_; }
     const std::vector<Real>& pressures() const { return p_; }
@@ -251,6 +255,29 @@ private:
 
     SimScene scene_;
     std::unique_ptr<Container> container_;
+    PeriodicDomain periodic_;                    // container.periodic_sides (inactive otherwise)
+    /// Calls f(q) for p and for each periodic image of p within `reach` of the other side
+    /// (the queries a neighbour search makes across the glued faces).
+    template <class F>
+    void forEachImageQuery(const Vec3& p, Real reach, F&& f) const {
+        f(p);
+        if (!periodic_.active()) return;
+        Real sx[2], sy[2];
+        int nx = 0, ny = 0;
+        sx[nx++] = 0;
+        sy[ny++] = 0;
+        if (periodic_.period[0] > 0) {
+            if (p.x() - periodic_.lo[0] < reach) sx[nx++] = periodic_.period[0];
+            else if (periodic_.lo[0] + periodic_.period[0] - p.x() < reach) sx[nx++] = -periodic_.period[0];
+        }
+        if (periodic_.period[1] > 0) {
+            if (p.y() - periodic_.lo[1] < reach) sy[ny++] = periodic_.period[1];
+            else if (periodic_.lo[1] + periodic_.period[1] - p.y() < reach) sy[ny++] = -periodic_.period[1];
+        }
+        for (int b = 0; b < ny; ++b)
+            for (int a = 0; a < nx; ++a)
+                if (a || b) f(Vec3(p.x() + sx[a], p.y() + sy[b], p.z()));
+    }
     std::unique_ptr<FluidMagnetics> magnetics_;  // only when the scene has magnets
     const PressureSolverEntry* solverEntry_ = nullptr;
     std::unique_ptr<PressureSolver> solver_;

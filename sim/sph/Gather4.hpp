@@ -5,6 +5,7 @@
 // from scalar loads (SSE2 has no gather instruction); the arithmetic after them is what
 // the four lanes buy.
 #include "sim/core/Types.hpp"
+#include "sim/spatial/PeriodicDomain.hpp"
 
 #include <cstdint>
 #if defined(__SSE2__)
@@ -22,20 +23,23 @@ inline __m128 gather4(const Vec3* v, const uint32_t* j, int c) {
     return _mm_set_ps(v[j[3]][c], v[j[2]][c], v[j[1]][c], v[j[0]][c]);
 }
 
-/// Offsets x_i - x_j to four points j (coordinates split into px, py, pz).
+/// Offsets x_i - x_j to four points j (coordinates split into px, py, pz), each to the
+/// nearest periodic image (PeriodicDomain; unchanged without periodic sides).
 struct Offsets4 {
     __m128 dx, dy, dz;
-    Offsets4(const Vec3& xi, const Real* px, const Real* py, const Real* pz, const uint32_t* j)
-        : dx(_mm_sub_ps(_mm_set1_ps(xi.x()), gather4(px, j))),
-          dy(_mm_sub_ps(_mm_set1_ps(xi.y()), gather4(py, j))),
+    Offsets4(const Vec3& xi, const Real* px, const Real* py, const Real* pz, const uint32_t* j,
+             const PeriodicDomain& periodic)
+        : dx(periodic.offset4(_mm_sub_ps(_mm_set1_ps(xi.x()), gather4(px, j)), 0)),
+          dy(periodic.offset4(_mm_sub_ps(_mm_set1_ps(xi.y()), gather4(py, j)), 1)),
           dz(_mm_sub_ps(_mm_set1_ps(xi.z()), gather4(pz, j))) {}
 };
 
 /// The offsets and their squared lengths.
 struct PairOffsets4 : Offsets4 {
     __m128 r2;
-    PairOffsets4(const Vec3& xi, const Real* px, const Real* py, const Real* pz, const uint32_t* j)
-        : Offsets4(xi, px, py, pz, j),
+    PairOffsets4(const Vec3& xi, const Real* px, const Real* py, const Real* pz, const uint32_t* j,
+                 const PeriodicDomain& periodic)
+        : Offsets4(xi, px, py, pz, j, periodic),
           r2(_mm_add_ps(_mm_add_ps(_mm_mul_ps(dx, dx), _mm_mul_ps(dy, dy)), _mm_mul_ps(dz, dz))) {}
 };
 #endif

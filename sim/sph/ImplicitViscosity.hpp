@@ -28,6 +28,7 @@
 // Walls: the wall term is Weiler's/SPlisHSPlasH's Akinci-boundary friction with
 // nu_wall = container.wall_friction * nu (0 = free slip: the walls add nothing, as with
 // SPlisHSPlasH's viscosityBoundary = 0). The wall reaction is not applied (walls are static).
+#include "sim/spatial/PeriodicDomain.hpp"
 #include "sim/core/Types.hpp"
 #include "sim/sph/Kernel.hpp"
 #include "sim/spatial/NeighborSearch.hpp"
@@ -47,6 +48,7 @@ struct ViscosityOperatorInput {
     const std::vector<Vec3>* boundaryPositions = nullptr; ///< wall particles x_b [m]
     const std::vector<Real>* boundaryVolumes = nullptr; ///< Akinci volumes V_b [m^3]
     CubicSplineKernel kernel;                           ///< the simulation's kernel (support h)
+    PeriodicDomain periodic;                            ///< pair offsets to the nearest image
     double supportRadius = 0;      ///< h [m]
     double particleMass = 0;       ///< m [kg]
     double restDensity = 0;        ///< rho0 [kg/m^3]

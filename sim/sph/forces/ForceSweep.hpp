@@ -51,7 +51,7 @@ void forceSweep(const PairForceView& s, const SweepConstants& k, const Viscosity
             for (; kk + 4 <= end; kk += 4) {
                 PairLanes4 p;
                 p.j = &s.fluid.index[kk];
-                const PairOffsets4 d(xi, s.px, s.py, s.pz, p.j);
+                const PairOffsets4 d(xi, s.px, s.py, s.pz, p.j, s.periodic);
                 p.dx = d.dx;
                 p.dy = d.dy;
                 p.dz = d.dz;
@@ -79,7 +79,7 @@ void forceSweep(const PairForceView& s, const SweepConstants& k, const Viscosity
             Pair1 p;
             p.i = i;
             p.j = s.fluid.index[kk];
-            p.xij = xi - s.x[p.j];
+            p.xij = s.periodic.offset(xi - s.x[p.j]);
             p.r2 = p.xij.squaredNorm();
             p.r = std::sqrt(p.r2);
             p.rhoSum = rhoi + s.rho[p.j];
@@ -97,7 +97,7 @@ void forceSweep(const PairForceView& s, const SweepConstants& k, const Viscosity
                 WallPair1 w;
                 w.i = i;
                 w.b = s.boundary.index[kb];
-                w.xib = xi - s.bx[w.b];
+                w.xib = s.periodic.offset(xi - s.bx[w.b]);
                 w.r2 = w.xib.squaredNorm();
                 w.gradW = s.kernel.gradW(w.xib, std::sqrt(w.r2));
                 // Walls push with the fluid particle's own pressure (Akinci 2012).

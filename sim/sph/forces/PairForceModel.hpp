@@ -52,6 +52,7 @@ struct PairForceView {
     const std::vector<Vec3>& bx;
     const std::vector<Real>& bVolume;
     const CubicSplineKernel& kernel;
+    const PeriodicDomain& periodic; ///< pair offsets go to the nearest image (x_ij, x_ib)
 };
 
 #if defined(__SSE2__)

@@ -34,6 +34,9 @@ struct PressureSweepInput {
     const float* wallVolume = nullptr;     ///< Akinci volumes V_b [m^3]
     float volume = 0;                      ///< fluid particle volume V [m^3]
     float wallMirror = 1;                  ///< a wall pushes with kWallMirror kappa_i
+    /// Periodic sides (sim/spatial/PeriodicDomain.hpp): x and y periods [m] and their
+    /// inverses, 0 on a closed axis; pair offsets then go to the nearest image.
+    float period[2] = {0, 0}, inverse[2] = {0, 0};
 };
 
 /// a_i = -sum_j V (kappa_i + kappa_j) grad W_ij - sum_b V_b mirror kappa_i grad W_ib for i in

@@ -731,3 +731,67 @@ TEST_CASE("Disordered balls: figures of the particle models", "[.figures]") {
                 std::fflush(stdout);
             }
 }
+
+TEST_CASE("a periodic flat layer has the infinite layer's field: H0 / (1 + chi) normal, H0 along it",
+          "[magnetization][periodic]") {
+    // A slab of 16 x 16 x 6 lattice particles repeating every 16 spacings in x and y is an
+    // infinite layer: B_n continuous gives H = H0 / (1 + chi) inside for a normal field,
+    // H_t continuous gives H = H0 for a field along it (no demagnetization). The same slab
+    // alone (no periodic copies) is a finite plate, whose centre field is far from either.
+    const double s = 1e-3;
+    const int nx = 16, layers = 6;
+    std::vector<Vec3> x;
+    std::vector<Real> V;
+    uint32_t state = 777;
+    auto jitter = [&]() {
+        state = state * 1664525u + 1013904223u;
+        return 0.1 * s * (double(state >> 8) / double(1u << 24) - 0.5);
+    };
+    for (int k = 0; k < layers; ++k)
+        for (int j = 0; j < nx; ++j)
+            for (int i = 0; i < nx; ++i) {
+                x.push_back(Vec3d((i + 0.5) * s + jitter(), (j + 0.5) * s + jitter(), (k + 0.5) * s + jitter()).cast<Real>());
+                V.push_back(Real(s * s * s));
+            }
+    const double L = nx * s, H0 = 1000, chi = 2.0;
+    // Interior: the middle two layers (the surface term and the staircase act within a
+    // support of the top and bottom).
+    auto interiorMean = [&](const std::vector<Vec3>& H, int axis) {
+        double sum = 0;
+        int count = 0;
+        for (size_t i = 0; i < x.size(); ++i) {
+            if (std::abs(x[i].z() - 0.5 * layers * s) > 0.75 * s) continue;
+            sum += H[i][axis];
+            ++count;
+        }
+        return sum / count;
+    };
+    for (Solver kind : {Solver::Direct, Solver::Tree}) {
+        for (int axis : {2, 0}) {
+            Vec3d dir = Vec3d::Zero();
+            dir[axis] = 1;
+            const std::vector<Magnet> magnets{uniformField(dir, H0)};
+            const double expected = axis == 2 ? H0 / (1 + chi) : H0;
+            MagnetizationSolver solver(params(kind, chi));
+            solver.setPeriodic(L, L);
+            std::vector<Vec3> H, M;
+            const auto stats = solver.solve(x, V, magnets, H, M);
+            const double periodic = interiorMean(H, axis);
+            // Every particle sees the same surroundings: the field may not depend on x, y.
+            double spread = 0;
+            for (size_t i = 0; i < x.size(); ++i)
+                if (std::abs(x[i].z() - 0.5 * layers * s) <= 0.75 * s)
+                    spread = std::max(spread, std::abs(H[i][axis] - periodic) / expected);
+            MagnetizationSolver alone(params(kind, chi));
+            std::vector<Vec3> Ha, Ma;
+            alone.solve(x, V, magnets, Ha, Ma);
+            const double finite = interiorMean(Ha, axis);
+            CAPTURE(int(kind), axis, stats.iterations, stats.residual, periodic, finite, expected, spread);
+            REQUIRE(stats.residual < 1e-3);
+            REQUIRE(periodic == Approx(expected).epsilon(0.025));
+            REQUIRE(spread < 0.03);
+            // The copies matter: the plate alone is off by more than 5 %.
+            REQUIRE(std::abs(finite / expected - 1) > 0.05);
+        }
+    }
+}
