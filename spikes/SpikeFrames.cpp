@@ -58,6 +58,10 @@ SpikeScene parseSpikeScene(const SceneDocument& doc)
     } else if (c.type == ContainerParams::Type::Box) {
         fluid.hasCenter = true;
         fluid.center = 0.5 * (c.min + c.max);
+        if (c.periodicSides) {
+            fluid.period[0] = c.max.x() - c.min.x();
+            fluid.period[1] = c.max.y() - c.min.y();
+        }
     }
     return scene;
 }
@@ -145,11 +149,12 @@ void addMagnetHistory(const SpikeScene& scene, double time, SpikeInput& in)
 // point: each particle of volume m / rho = rho0 h^3 / rho (h = spacing [m], rho0 the fluid's
 // rest density, rho the file's `density` column where present) a smoothed dipole of the
 // scene's magnetization.smoothing (the simulator's model, sim/particlefield/DipoleTree.hpp),
-// summed by a tree (opening angle 0.6).
+// summed by a tree (opening angle 0.6), with the periodic copies of a box with periodic sides
+// (fluid.period).
 std::function<Vec3d(const Vec3d&)> particleFieldOf(const ParticleTable& particles, const std::vector<Vec3>& x,
-                                                   const std::vector<Vec3>& M, double spacing, double restDensity,
-                                                   double smoothing)
+                                                   const std::vector<Vec3>& M, double spacing, const SpikeFluid& fluid)
 {
+    const double restDensity = fluid.density, smoothing = fluid.law.smoothing;
     const int rho = particles.column("density");
     const double h3 = std::pow(spacing, 3);
     std::vector<Real> volume(x.size(), Real(h3));
@@ -159,6 +164,7 @@ std::function<Vec3d(const Vec3d&)> particleFieldOf(const ParticleTable& particle
             if (r > 0) volume[i] = Real(h3 * restDensity / r);
         }
     auto evaluator = std::make_shared<ParticleFieldEvaluator>();
+    evaluator->setPeriodic(fluid.period[0], fluid.period[1]);
     evaluator->build(x, volume, M, 0.6, smoothing);
     return [evaluator](const Vec3d& p) { return evaluator->inducedField(p); };
 }
@@ -197,8 +203,7 @@ void loadParticles(const SpikeScene& scene, const ParticleTable& particles, cons
             const std::vector<Vec3> M = particles.vec3("mx", "my", "mz");
             for (size_t i = 0; i < M.size(); ++i) in.particles.magnetization[i] = double(M[i].norm());
             if (scene.params.particleField && in.particles.spacing > 0)
-                in.particleField = particleFieldOf(particles, x, M, in.particles.spacing, in.fluid.density,
-                                                   in.fluid.law.smoothing);
+                in.particleField = particleFieldOf(particles, x, M, in.particles.spacing, in.fluid);
         } else {
             // Older files: the fluid's law in the magnets' field at the particle.
             for (size_t i = 0; i < x.size(); ++i)

@@ -50,6 +50,8 @@ struct SpikeFluid {
     bool hasCenter = false;         ///< a natural anchor (the container's centre) for uniform fields
     Vec3d center{0, 0, 0};
     double particleSpacing = 0.0;   ///< [m]; 0 = unknown
+    double period[2] = {0.0, 0.0};  ///< container.periodic_sides: the box's x and y extent [m] (the
+                                    ///< particle field sums the periodic copies); 0 = not periodic
 };
 
 /// The frame's particles (optional): positions and |M| [A/m] for the mapping area.

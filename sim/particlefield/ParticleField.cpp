@@ -9,7 +9,8 @@ void ParticleFieldEvaluator::build(const std::vector<Vec3>& x, const std::vector
     tree_.setSurfaceOnset(localCorrection);
     tree_.build(x, volume, openingAngle);
     sorted_.assign(x.size(), 0);
-    for (size_t k = 0; k < tree_.order().size(); ++k) sorted_[tree_.order()[k]] = uint32_t(k);
+    for (size_t k = 0; k < tree_.order().size(); ++k) // (a periodic tree's copies come after x)
+        if (tree_.order()[k] < x.size()) sorted_[tree_.order()[k]] = uint32_t(k);
     tree_.setMagnetizationUnsorted(M);
     correct_ = localCorrection;
     corrected_ = std::make_unique<std::once_flag>();

@@ -25,6 +25,9 @@ public:
     /// smoothing: the particle model, as MagnetizationParams::smoothing (pass the solver's).
     /// localCorrection: as MagnetizationParams::localCorrection (pass the solver's), used by
     /// inducedFieldAtParticle() only.
+    /// Periodic sides for the next build() (DipoleTree::setPeriodic): the particles repeat with
+    /// periods Lx, Ly [m] in x and y; 0 = not periodic.
+    void setPeriodic(double Lx, double Ly) { tree_.setPeriodic(Lx, Ly); }
     void build(const std::vector<Vec3>& x, const std::vector<Real>& volume, const std::vector<Vec3>& M,
                double openingAngle = 0.5, double smoothing = DipoleTree::kDefaultSmoothing,
                bool localCorrection = MagnetizationParams{}.localCorrection);

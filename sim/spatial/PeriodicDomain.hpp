@@ -7,8 +7,8 @@
 //
 // Contract: period > 2 (support + skin) on a periodic axis, so that a particle meets at most
 // one image of another (FluidSimulation checks it). An axis with period 0 is not periodic:
-// its offsets are returned unchanged, bit for bit (d - 0 * round(d * 0) = d), so the pair
-// loops apply the map unconditionally instead of branching.
+// its offsets are returned unchanged, bit for bit (d - 0 * round(d * 0) = d), so a loop may
+// apply the map to every pair; offset() and the four-lane gathers skip it when no axis is.
 #include "sim/core/Types.hpp"
 
 #include <cmath>
@@ -39,6 +39,7 @@ struct PeriodicDomain {
 
     /// The nearest image of the offset d = x_i - x_j.
     Vec3 offset(Vec3 d) const {
+        if (!active()) return d;
         for (int a = 0; a < 2; ++a) d[a] -= period[a] * std::nearbyint(d[a] * inverse[a]);
         return d;
     }

@@ -29,9 +29,14 @@ struct Offsets4 {
     __m128 dx, dy, dz;
     Offsets4(const Vec3& xi, const Real* px, const Real* py, const Real* pz, const uint32_t* j,
              const PeriodicDomain& periodic)
-        : dx(periodic.offset4(_mm_sub_ps(_mm_set1_ps(xi.x()), gather4(px, j)), 0)),
-          dy(periodic.offset4(_mm_sub_ps(_mm_set1_ps(xi.y()), gather4(py, j)), 1)),
-          dz(_mm_sub_ps(_mm_set1_ps(xi.z()), gather4(pz, j))) {}
+        : dx(_mm_sub_ps(_mm_set1_ps(xi.x()), gather4(px, j))),
+          dy(_mm_sub_ps(_mm_set1_ps(xi.y()), gather4(py, j))),
+          dz(_mm_sub_ps(_mm_set1_ps(xi.z()), gather4(pz, j))) {
+        if (periodic.active()) { // (predictable: the same every pair of a run)
+            dx = periodic.offset4(dx, 0);
+            dy = periodic.offset4(dy, 1);
+        }
+    }
 };
 
 /// The offsets and their squared lengths.
