@@ -158,6 +158,7 @@ void FluidSimulation::updateNeighbors() {
 #if defined(__SSE2__)
     const CubicSplineKernel4 kernel4(kernel_);
 #endif
+    const PeriodicDomain periodic = periodic_; // a copy: the loop's float stores could alias the member
     // Compacts particle i's candidates in `lists` (points at qx, qy, qz) to its neighbours;
     // returns sum_j V_j W_ij with V_j = volume[j], or V when volume is null. Branch-free:
     // every candidate is written to the next free slot, which advances only for a
@@ -176,7 +177,7 @@ void FluidSimulation::updateNeighbors() {
         __m128 sum4 = _mm_setzero_ps();
         for (; k + 4 <= slots; k += 4) {
             const uint32_t* c = cand + k;
-            const PairOffsets4 d(xi, qx, qy, qz, c, periodic_);
+            const PairOffsets4 d(xi, qx, qy, qz, c, periodic);
             const __m128 r = _mm_sqrt_ps(d.r2);
             const __m128 vol = volume ? gather4(volume, c) : _mm_set1_ps(V);
             sum4 = _mm_add_ps(sum4, _mm_mul_ps(vol, kernel4.W(r)));
@@ -200,7 +201,7 @@ void FluidSimulation::updateNeighbors() {
 #endif
         for (; k < slots; ++k) {
             const uint32_t j = cand[k];
-            const Vec3 d = periodic_.offset(Vec3(xi.x() - qx[j], xi.y() - qy[j], xi.z() - qz[j]));
+            const Vec3 d = periodic.offset(Vec3(xi.x() - qx[j], xi.y() - qy[j], xi.z() - qz[j]));
             const Real r2 = d.squaredNorm();
             out[cnt] = j;
             const Real r = std::sqrt(r2);

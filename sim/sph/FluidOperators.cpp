@@ -39,16 +39,17 @@ void FluidSimulation::computeSurfaceView() {
         const size_t n = x_.size();
         const Real V = Real(volume_);
         colorGradient_.resize(n);
+        const PeriodicDomain periodic = periodic_;
         forEachParticle(n, [&](size_t i) {
             Vec3 fluid = Vec3::Zero(), wall = Vec3::Zero();
             for (uint32_t k = fluidNbr_.begin(i); k < fluidNbr_.end(i); ++k) {
-                const Vec3 xij = periodic_.offset(x_[i] - x_[fluidNbr_.index[k]]);
+                const Vec3 xij = periodic.offset(x_[i] - x_[fluidNbr_.index[k]]);
                 fluid += kernel_.gradW(xij, xij.norm());
             }
             fluid *= V;
             for (uint32_t k = boundaryNbr_.begin(i); k < boundaryNbr_.end(i); ++k) {
                 const uint32_t b = boundaryNbr_.index[k];
-                const Vec3 xib = periodic_.offset(x_[i] - bx_[b]);
+                const Vec3 xib = periodic.offset(x_[i] - bx_[b]);
                 wall += bVolume_[b] * kernel_.gradW(xib, xib.norm());
             }
             colorGradient_[i] = fluid + wall;
@@ -62,6 +63,7 @@ void FluidSimulation::computeSurfaceView() {
         const size_t n = x_.size();
         exposure_.resize(n);
         const Real s = Real(spacing_);
+        const PeriodicDomain periodic = periodic_;
         forEachParticle(n, [&](size_t i) {
             const Vec3 g = colorGradient_[i];
             const Real gn = g.norm();
@@ -72,7 +74,7 @@ void FluidSimulation::computeSurfaceView() {
             const Vec3 out = -g / gn;
             Real covered = 0;
             for (uint32_t k = fluidNbr_.begin(i); k < fluidNbr_.end(i); ++k) {
-                const Vec3 d = periodic_.offset(x_[fluidNbr_.index[k]] - x_[i]);
+                const Vec3 d = periodic.offset(x_[fluidNbr_.index[k]] - x_[i]);
                 const Real r = d.norm();
                 if (!(r > 0) || r > 2 * s) continue;
                 const Real cosine = d.dot(out) / r;

@@ -38,13 +38,14 @@ void ImplicitViscosity::setUp(const ViscosityOperatorInput& input, double dt) {
     wallCoefficient_.resize(wall.index.size());
     inverseDiagonal_.resize(n);
     const Real rdt = Real(dt);
+    const PeriodicDomain periodic = in_.periodic; // a copy: the loop stores floats
     forEachParticle(n, [&](size_t i) {
         // Diagonal block of I + dt L: I - dt (sum_j c_ij x_ij x_ij^T + sum_b c_ib x_ib x_ib^T),
         // positive definite since every c < 0.
         Mat3 block = Mat3::Zero();
         for (uint32_t k = fluid.begin(i); k < fluid.end(i); ++k) {
             const uint32_t j = fluid.index[k];
-            const Vec3 xij = in_.periodic.offset(x[i] - x[j]);
+            const Vec3 xij = periodic.offset(x[i] - x[j]);
             const Real r2 = xij.squaredNorm();
             const Real c = fluidScale / ((rho[i] + rho[j]) * (r2 + eps2)) * kernel.gradWFactor(std::sqrt(r2));
             pairCoefficient_[k] = c;
@@ -55,7 +56,7 @@ void ImplicitViscosity::setUp(const ViscosityOperatorInput& input, double dt) {
             const std::vector<Real>& bV = *in_.boundaryVolumes;
             for (uint32_t k = wall.begin(i); k < wall.end(i); ++k) {
                 const uint32_t b = wall.index[k];
-                const Vec3 xib = in_.periodic.offset(x[i] - bx[b]);
+                const Vec3 xib = periodic.offset(x[i] - bx[b]);
                 const Real r2 = xib.squaredNorm();
                 const Real c = wallScale * bV[b] / rho[i] / (r2 + eps2) * kernel.gradWFactor(std::sqrt(r2));
                 wallCoefficient_[k] = c;
@@ -73,18 +74,19 @@ void ImplicitViscosity::acceleration(const std::vector<Vec3>& v, std::vector<Vec
     const NeighborLists& wall = *in_.boundaryNeighbors;
     const bool walls = in_.wallViscosity > 0;
     a.resize(v.size());
+    const PeriodicDomain periodic = in_.periodic; // a copy: the loop stores floats
     forEachParticle(v.size(), [&](size_t i) {
         const Vec3 xi = x[i], vi = v[i];
         Vec3 acc = Vec3::Zero();
         for (uint32_t k = fluid.begin(i); k < fluid.end(i); ++k) {
             const uint32_t j = fluid.index[k];
-            const Vec3 xij = in_.periodic.offset(xi - x[j]);
+            const Vec3 xij = periodic.offset(xi - x[j]);
             acc += (pairCoefficient_[k] * (vi - v[j]).dot(xij)) * xij;
         }
         if (walls) {
             const std::vector<Vec3>& bx = *in_.boundaryPositions;
             for (uint32_t k = wall.begin(i); k < wall.end(i); ++k) {
-                const Vec3 xib = in_.periodic.offset(xi - bx[wall.index[k]]);
+                const Vec3 xib = periodic.offset(xi - bx[wall.index[k]]);
                 acc += (wallCoefficient_[k] * vi.dot(xib)) * xib;
             }
         }

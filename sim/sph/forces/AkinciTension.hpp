@@ -44,6 +44,7 @@ public:
 #if defined(__SSE2__)
         const CubicSplineKernel4 kernel4(s.kernel);
 #endif
+        const PeriodicDomain periodic = s.periodic; // a copy: see ForceSweep
         forEachParticle(n, [&](size_t i) {
             Vec3 sum = Vec3::Zero();
             uint32_t k = s.fluid.begin(i);
@@ -54,7 +55,7 @@ public:
                 __m128 sx = _mm_setzero_ps(), sy = _mm_setzero_ps(), sz = _mm_setzero_ps();
                 for (; k + 4 <= end; k += 4) {
                     const uint32_t* j = &s.fluid.index[k];
-                    const PairOffsets4 d(s.x[i], s.px, s.py, s.pz, j, s.periodic);
+                    const PairOffsets4 d(s.x[i], s.px, s.py, s.pz, j, periodic);
                     const __m128 f =
                         _mm_mul_ps(_mm_div_ps(rho04, gather4(s.rho.data(), j)), kernel4.gradFactor(_mm_sqrt_ps(d.r2)));
                     sx = _mm_add_ps(sx, _mm_mul_ps(f, d.dx));
@@ -66,7 +67,7 @@ public:
 #endif
             for (; k < end; ++k) {
                 const uint32_t j = s.fluid.index[k];
-                const Vec3 xij = s.periodic.offset(s.x[i] - s.x[j]);
+                const Vec3 xij = periodic.offset(s.x[i] - s.x[j]);
                 sum += (rho0_ / s.rho[j]) * s.kernel.gradW(xij, xij.norm());
             }
             normal_[i] = h_ * V_ * sum;

@@ -31,6 +31,9 @@ void forceSweep(const PairForceView& s, const SweepConstants& k, const Viscosity
     const CubicSplineKernel4 kernel4(s.kernel);
 #endif
     const bool walls = visc.wantsWalls() || ten.wantsWalls();
+    // A copy: the loop's float stores could alias the view's, so a reference would be reloaded
+    // (and its test repeated) every pair.
+    const PeriodicDomain periodic = s.periodic;
     forEachParticle(n, [&](size_t i) {
         Vec3 acc = k.gravity;
         const Vec3 xi = s.x[i];
@@ -51,7 +54,7 @@ void forceSweep(const PairForceView& s, const SweepConstants& k, const Viscosity
             for (; kk + 4 <= end; kk += 4) {
                 PairLanes4 p;
                 p.j = &s.fluid.index[kk];
-                const PairOffsets4 d(xi, s.px, s.py, s.pz, p.j, s.periodic);
+                const PairOffsets4 d(xi, s.px, s.py, s.pz, p.j, periodic);
                 p.dx = d.dx;
                 p.dy = d.dy;
                 p.dz = d.dz;
@@ -79,7 +82,7 @@ void forceSweep(const PairForceView& s, const SweepConstants& k, const Viscosity
             Pair1 p;
             p.i = i;
             p.j = s.fluid.index[kk];
-            p.xij = s.periodic.offset(xi - s.x[p.j]);
+            p.xij = periodic.offset(xi - s.x[p.j]);
             p.r2 = p.xij.squaredNorm();
             p.r = std::sqrt(p.r2);
             p.rhoSum = rhoi + s.rho[p.j];
@@ -97,7 +100,7 @@ void forceSweep(const PairForceView& s, const SweepConstants& k, const Viscosity
                 WallPair1 w;
                 w.i = i;
                 w.b = s.boundary.index[kb];
-                w.xib = s.periodic.offset(xi - s.bx[w.b]);
+                w.xib = periodic.offset(xi - s.bx[w.b]);
                 w.r2 = w.xib.squaredNorm();
                 w.gradW = s.kernel.gradW(w.xib, std::sqrt(w.r2));
                 // Walls push with the fluid particle's own pressure (Akinci 2012).
