@@ -55,9 +55,11 @@ public:
     bool contains(const Vec3d& p, double margin) const override {
         for (int a = 0; a < 3; ++a) {
             // A periodic side is no wall: no margin, and a particle a little past the face
-            // (wrapped at the next neighbour search) is still in.
+            // (wrapped at the next neighbour search, at most half a Verlet skin out) is still in;
+            // half a period out is not (the sanity guard's "outside").
             if (periodic_ && a < 2) {
-                if (!std::isfinite(p[a])) return false;
+                const double half = 0.5 * (hi_[a] - lo_[a]);
+                if (!(p[a] >= lo_[a] - half && p[a] <= hi_[a] + half)) return false;
                 continue;
             }
             if (!(p[a] >= lo_[a] + margin && p[a] <= hi_[a] - margin)) return false;

@@ -59,6 +59,13 @@ FluidSimulation::FluidSimulation(const SimScene& scene)
             if (!(periodic_.period[a] > least))
                 throw SceneError(scene_.path + ": container.periodic_sides: the box must be wider than " +
                                  std::to_string(least) + " m (2 supports + skin + 4 spacings) in x and y");
+        // The seed must lie in one period: a block past a glued face would overlap itself.
+        for (const Vec3& p : x_)
+            for (int a = 0; a < 2; ++a)
+                if (!(p[a] >= periodic_.lo[a] && p[a] < periodic_.lo[a] + periodic_.period[a]))
+                    throw SceneError(scene_.path + ": container.periodic_sides: fluid outside the box in " +
+                                     (a ? "y" : "x") + " (particle at " + std::to_string(p[a]) +
+                                     " m): a block must lie within min and max, or it overlaps its periodic copy");
     }
     sampleBoundary();
     chooseSpeedScales();

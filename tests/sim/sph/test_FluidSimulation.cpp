@@ -434,3 +434,29 @@ TEST_CASE("periodic sides: a layer slides across the glued faces without seam, a
         REQUIRE(top < 0.004);
     }
 }
+
+TEST_CASE("periodic sides refuse a box too narrow for the search and a block past the glued faces", "[sph][periodic]") {
+    SimScene scene;
+    scene.path = "periodic-bad";
+    scene.fluid.restDensity = 1000;
+    scene.fluid.spacing = 0.001;
+    FluidBlock block;
+    block.min = Vec3d(0, 0, 0);
+    block.max = Vec3d(0.012, 0.012, 0.003);
+    scene.fluid.blocks.push_back(block);
+    scene.container.type = ContainerParams::Type::Box;
+    scene.container.min = Vec3d(0, 0, 0);
+    scene.container.max = Vec3d(0.012, 0.012, 0.01);
+    scene.container.periodicSides = true;
+    // The reference scene runs: 12 spacings are enough.
+    REQUIRE_NOTHROW(FluidSimulation(scene));
+    // The floor is the only wall: 12 x 12 lattice points, none on the glued faces twice.
+    REQUIRE(FluidSimulation(scene).boundaryPositions().size() == 144);
+    SimScene narrow = scene;
+    narrow.container.max.x() = 0.006;
+    narrow.fluid.blocks[0].max.x() = 0.006;
+    REQUIRE_THROWS_WITH(FluidSimulation(narrow), Catch::Contains("container.periodic_sides: the box must be wider"));
+    SimScene past = scene;
+    past.fluid.blocks[0].max.y() = 0.015;
+    REQUIRE_THROWS_WITH(FluidSimulation(past), Catch::Contains("fluid outside the box in y"));
+}
