@@ -23,8 +23,12 @@ bench_need ferro-sim ferro-surface ferro-spikes ferro-tips
 
 scene="$root/scripts/bench/periodic_layer.toml"
 critical=10420
-cases="0.001:5210 0.001:6773 0.001:8340 0.001:10420 0.001:15600 0.00075:8340 0.00075:15600 0.0005:8340 0.0005:15600"
-[[ $quick == 1 ]] && cases="0.001:6773 0.001:15600"
+# SPACING:FIELD[:TENSION]: TENSION is fluid.surface_tension_model (default the scene's,
+# "akinci2013"; "csf" has the capillary stiffness Akinci's lacks: docs/physics/sph-solver.md).
+cases="0.001:5210 0.001:6773 0.001:8340 0.001:10420 0.001:15600 0.00075:8340 0.00075:15600 0.0005:8340 0.0005:15600
+       0.001:8340:csf 0.001:15600:csf 0.00075:8340:csf 0.00075:15600:csf 0.0005:8340:csf 0.0005:15600:csf"
+[[ $quick == 1 ]] && cases="0.001:6773 0.001:15600 0.001:15600:csf"
+[[ -n "${PERIODIC_LAYER_CASES:-}" ]] && cases="$PERIODIC_LAYER_CASES" # e.g. "0.001:15600:csf"
 
 # run SPACING FIELD [K=V...]: the shot's frames in $dir (cached), its CPU seconds in $cpu.
 run() {
@@ -41,18 +45,18 @@ run() {
   cpu="$(cat "$dir/done")"
 }
 
-echo "spacing_mm,field_A_m,field_over_critical,particles,sim_cpu_s,rms_h_spacings,peaks,nn_median_mm,nn_over_lambda_c,apex_mm,mean_h_mm" \
+echo "tension_model,spacing_mm,field_A_m,field_over_critical,particles,sim_cpu_s,rms_h_spacings,peaks,nn_median_mm,nn_over_lambda_c,apex_mm,mean_h_mm" \
   > "$out/periodic_layer.csv"
 for c in $cases; do
-  s="${c%%:*}" H="${c##*:}"
-  run "$s" "$H"
+  IFS=: read -r s H model <<< "$c"
+  if [[ -n "$model" ]]; then run "$s" "$H" "fluid.surface_tension_model=$model"; else model=akinci2013; run "$s" "$H"; fi
   # The mean over the frames from 0.6 s on (the pattern after its growth).
   python3 "$root/scripts/bench/rosensweig.py" "$dir" --period 0.024,0.024 --smooth --first 0.599 > "$work/pattern.txt"
   n="$(head -c 4000 "$dir/particles_0000.ply" | grep -a -m1 '^element vertex' | awk '{print $3}')"
-  awk -v s="$s" -v H="$H" -v Hc="$critical" -v n="$n" -v cpu="$cpu" 'NR > 2 {
+  awk -v model="$model" -v s="$s" -v H="$H" -v Hc="$critical" -v n="$n" -v cpu="$cpu" 'NR > 2 {
       k++; mh += $2; rms += $3; pk += $6; apex += ($10 == "nan" ? 0 : $10); ap += ($10 == "nan" ? 0 : 1)
       if ($7 != "nan") { nn += $7; nr += $8; m++ } }
-    END { printf "%g,%s,%.3f,%d,%.0f,%.3f,%.1f,%s,%s,%s,%.2f\n", s * 1e3, H, H / Hc, n, cpu, rms / k, pk / k,
+    END { printf "%s,%g,%s,%.3f,%d,%.0f,%.3f,%.1f,%s,%s,%s,%.2f\n", model, s * 1e3, H, H / Hc, n, cpu, rms / k, pk / k,
           m ? sprintf("%.2f", nn / m) : "nan", m ? sprintf("%.2f", nr / m) : "nan",
           ap ? sprintf("%.2f", apex / ap) : "nan", mh / k }' "$work/pattern.txt" >> "$out/periodic_layer.csv"
 done
@@ -84,9 +88,9 @@ papex="$(tail -n +2 "$work/tips.csv" | cut -d, -f4 | sort -g | tail -n 1 | awk '
   echo "in spacings (a settled layer with no field reads 0.12-0.16). The seed fills whole layers: 5 mm"
   echo "at 1 and 0.5 mm, 4.5 mm at 0.75 mm (k_c h = 3.1-3.4, deep either way)."
   echo
-  echo "| spacing mm | field / critical | particles | sim CPU s | rms_h | peaks | nearest peak mm | / lambda_c | apex mm |"
-  echo "| ---: | ---: | ---: | ---: | ---: | ---: | ---: | ---: | ---: |"
-  awk -F, 'NR > 1 { printf "| %s | %s | %s | %s | %s | %s | %s | %s | %s |\n", $1, $3, $4, $5, $6, $7, $8, $9, $10 }' \
+  echo "| tension | spacing mm | field / critical | particles | sim CPU s | rms_h | peaks | nearest peak mm | / lambda_c | apex mm |"
+  echo "| --- | ---: | ---: | ---: | ---: | ---: | ---: | ---: | ---: | ---: |"
+  awk -F, 'NR > 1 { printf "| %s | %s | %s | %s | %s | %s | %s | %s | %s | %s |\n", $1, $2, $4, $5, $6, $7, $8, $9, $10, $11 }' \
     "$out/periodic_layer.csv"
   echo
   echo "Procedural spikes of the same scene (1 mm, 1.5 x critical, body force: the layer stays flat;"

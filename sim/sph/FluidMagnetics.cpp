@@ -32,44 +32,16 @@ const char* solverName(MagnetizationParams::Solver s) {
 FluidMagnetics::FluidMagnetics(const SimScene& scene, double particleVolume, double spacing)
     : tracks_(scene.magnets), law_(scene.magnetization), volume_(particleVolume), spacing_(spacing),
       rho0_(scene.fluid.restDensity), gravity_(scene.solver.gravity.norm()),
-      curve_(scene.magnetization.susceptibility, scene.magnetization.saturation) {
+      curve_(scene.magnetization.susceptibility, scene.magnetization.saturation), flat_(spacing, particleVolume) {
     if (active() && magnetic()) {
         solver_ = std::make_unique<MagnetizationSolver>(law_);
         const ContainerParams& c = scene.container;
         if (c.type == ContainerParams::Type::Box && c.periodicSides) // the layer's periodic copies
             solver_->setPeriodic(c.max.x() - c.min.x(), c.max.y() - c.min.y());
     }
-    // The surface model's scales from a flat cubic lattice surface (the seed's lattice,
-    // support 2 spacings as FluidSimulation uses): |grad c| of the top layer and the
-    // column sum kappa = sum_layers w V |grad c| / s^2.
-    const double s = spacing_;
-    const CubicSplineKernel kernel(Real(2 * s));
-    std::vector<double> gradient;
-    for (int depth = 0; depth <= 3; ++depth) {
-        double gz = 0;
-        for (int a = -2; a <= 2; ++a)
-            for (int b = -2; b <= 2; ++b)
-                for (int k = -2; k <= 2; ++k) {
-                    if (k > depth) continue;   // above the top layer
-                    const Vec3 rij = Vec3(Real(a), Real(b), Real(k)) * Real(-s);
-                    gz += volume_ * double(kernel.gradW(rij, rij.norm()).z());
-                }
-        gradient.push_back(std::abs(gz));
-    }
-    flatGradient_ = gradient[0];
-    double column = 0;
-    for (double g : gradient) column += surfaceWeight(g) * g;
-    layerFactor_ = volume_ * column / (s * s);
 }
 
-double FluidMagnetics::surfaceWeight(double gradient) const {
-    // 0 below a quarter of the flat lattice surface's |grad c|, 1 from half of it on.
-    // Not the fill rho / rho0: the pressure solver squeezes the top layer until its
-    // (deficient) density sum reaches rest density, so at rest every particle is full.
-    if (!(flatGradient_ > 0)) return 0;
-    const double t = std::clamp((gradient / flatGradient_ - 0.25) / 0.25, 0.0, 1.0);
-    return t * t * (3 - 2 * t);
-}
+double FluidMagnetics::surfaceWeight(double gradient) const { return flat_.weight(gradient); }
 
 FluidMagnetics::~FluidMagnetics() = default;
 
@@ -362,7 +334,7 @@ void FluidMagnetics::computeSurfacePressure(const std::vector<Vec3>& x, const st
     double C = 0;
     for (size_t i = 0; i < n; ++i)
         if (weight[i] >= 0.5) C = std::max(C, psi[i]);
-    const double scale = 1.0 / (rho0_ * layerFactor_);
+    const double scale = 1.0 / (rho0_ * flat_.layerFactor());
     forEachParticle(n, [&](size_t i) {
         kelvin_[i] = weight[i] > 0 ? Vec3((scale * weight[i] * std::max(C - psi[i], 0.0) * gradC[i].cast<double>()).cast<Real>())
                                    : Vec3::Zero();

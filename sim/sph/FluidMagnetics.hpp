@@ -25,6 +25,7 @@
 #include "sim/magnetics/DemagnetizationCurve.hpp"
 #include "sim/magnets/MagnetField.hpp"
 #include "sim/spatial/NeighborSearch.hpp"
+#include "sim/sph/FreeSurface.hpp"
 #include "sim/scene/SimParams.hpp"
 
 #include <algorithm>
@@ -165,9 +166,9 @@ private:
     double maxAcceleration_ = 0;
     double maxFieldSeen_ = 0;
     size_t unconvergedInRow_ = 0;
-    double flatGradient_ = 0, layerFactor_ = 1;  // surface model: |grad c| of a flat lattice surface, kappa
     bool traction_ = true;                   // the last solve had the particles' own field
     DemagnetizationCurve curve_;             // M along H_magnets against |H_magnets|, fitted at each solve
+    FlatSurface flat_;                       // surface model: the flat lattice surface's weight and kappa
     std::vector<Vec3> HextSolved_;           // applied field at the last solve, current order
     static constexpr size_t kMaxInterval = 200;
     // The free-surface curve's memory [s]: the time over which its fits average the surface,

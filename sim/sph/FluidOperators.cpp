@@ -1,6 +1,7 @@
 // FluidSimulation's SPH operators: the force sweep (sim/sph/forces), the pressure
 // accelerations the pressure solvers share, the free-surface view and the magnetics update.
 #include "sim/sph/FluidSimulation.hpp"
+#include "sim/sph/FreeSurface.hpp"
 #include "sim/sph/forces/ForceSweep.hpp"
 
 #include "sim/core/Constants.hpp"
@@ -31,60 +32,9 @@ void FluidSimulation::updateMagnetics(bool forceSolve) {
 }
 
 void FluidSimulation::computeSurfaceView() {
-    {
-        // The colour gradient grad c_i = V sum_j grad W_ij + sum_b V_b grad W_ib: fluid and
-        // walls, so a wetted wall is no surface (FluidMagnetics.hpp).
-        // Tried and dropped: the fluid's gradient alone with its part away from a wall
-        // removed (the same 18 mm/s at the rim of a pool over a magnet, and faster outliers).
-        const size_t n = x_.size();
-        const Real V = Real(volume_);
-        colorGradient_.resize(n);
-        const PeriodicDomain periodic = periodic_;
-        forEachParticle(n, [&](size_t i) {
-            Vec3 fluid = Vec3::Zero(), wall = Vec3::Zero();
-            for (uint32_t k = fluidNbr_.begin(i); k < fluidNbr_.end(i); ++k) {
-                const Vec3 xij = periodic.offset(x_[i] - x_[fluidNbr_.index[k]]);
-                fluid += kernel_.gradW(xij, xij.norm());
-            }
-            fluid *= V;
-            for (uint32_t k = boundaryNbr_.begin(i); k < boundaryNbr_.end(i); ++k) {
-                const uint32_t b = boundaryNbr_.index[k];
-                const Vec3 xib = periodic.offset(x_[i] - bx_[b]);
-                wall += bVolume_[b] * kernel_.gradW(xib, xib.norm());
-            }
-            colorGradient_[i] = fluid + wall;
-        });
-    }
-    {
-        // Exposure: 1 when no fluid particle stands in the cone of half-angle ~40 degrees
-        // along the outward direction -grad c within 1.5 spacings, falling smoothly to 0
-        // as one enters it (the scan-region test of Marrone et al. 2010). In a moving,
-        // disordered fluid |grad c| alone reaches 40 % of a flat surface's value deep inside.
-        const size_t n = x_.size();
-        exposure_.resize(n);
-        const Real s = Real(spacing_);
-        const PeriodicDomain periodic = periodic_;
-        forEachParticle(n, [&](size_t i) {
-            const Vec3 g = colorGradient_[i];
-            const Real gn = g.norm();
-            if (!(gn > 0)) {
-                exposure_[i] = 0;
-                return;
-            }
-            const Vec3 out = -g / gn;
-            Real covered = 0;
-            for (uint32_t k = fluidNbr_.begin(i); k < fluidNbr_.end(i); ++k) {
-                const Vec3 d = periodic.offset(x_[fluidNbr_.index[k]] - x_[i]);
-                const Real r = d.norm();
-                if (!(r > 0) || r > 2 * s) continue;
-                const Real cosine = d.dot(out) / r;
-                const Real inCone = std::clamp((cosine - Real(0.65)) / Real(0.2), Real(0), Real(1));
-                const Real near = std::clamp((2 * s - r) / (Real(0.5) * s), Real(0), Real(1));
-                covered = std::max(covered, inCone * near);
-            }
-            exposure_[i] = 1 - covered;
-        });
-    }
+    const FreeSurfaceInput in{x_, fluidNbr_, boundaryNbr_, bx_, bVolume_, kernel_, periodic_, Real(volume_), Real(spacing_)};
+    computeColorGradient(in, colorGradient_);
+    computeExposure(in, colorGradient_, exposure_);
 }
 
 void FluidSimulation::computeAccelerations(const Real* pOverRho2) {

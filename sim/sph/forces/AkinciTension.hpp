@@ -28,11 +28,8 @@ public:
 
     explicit AkinciTension(const PairForceSetup& s)
         : gamma_(Real(kCalibration * s.scene->fluid.surfaceTension / (s.restDensity * s.spacing * s.spacing))),
-          rho0_(Real(s.restDensity)), V_(Real(s.volume)), h_(Real(s.support)), cohesion_(Real(s.support)) {
-        const double sigma = s.scene->fluid.surfaceTension;
-        // Capillary wave time step limit (Brackbill et al. 1992).
-        if (sigma > 0) stepLimit_ = std::sqrt(s.restDensity * s.spacing * s.spacing * s.spacing / (2 * kPi * sigma));
-    }
+          rho0_(Real(s.restDensity)), V_(Real(s.volume)), h_(Real(s.support)), cohesion_(Real(s.support)),
+          stepLimit_(capillaryStepLimit(s)) {}
 
     bool active() const { return gamma_ > 0; }
     double timeStepLimit() const { return stepLimit_; }
@@ -110,7 +107,7 @@ private:
 #if defined(__SSE2__)
     CohesionKernel4 cohesion4_{cohesion_};
 #endif
-    double stepLimit_ = 1e30;
+    double stepLimit_;
     std::vector<Vec3> normal_;
 };
 

@@ -35,7 +35,7 @@ void forceSweep(const PairForceView& s, const SweepConstants& k, const Viscosity
     // (and its test repeated) every pair.
     const PeriodicDomain periodic = s.periodic;
     forEachParticle(n, [&](size_t i) {
-        Vec3 acc = k.gravity;
+        Vec3 acc = ten.own(visc.own(k.gravity, i), i);
         const Vec3 xi = s.x[i];
         const Real rhoi = s.rho[i];
         const Real pi = kPressure ? pOverRho2[i] : 0;

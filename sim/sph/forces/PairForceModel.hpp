@@ -7,6 +7,7 @@
 //
 // A model is a class derived from PairForceModel (whose members do nothing) that overrides what
 // it uses; the sweep calls them in this order for every particle i:
+//   acc = own(acc, i)                     a force of the particle's own (e.g. a surface traction)
 //   Lanes lanes(i, view) const            its per-particle constants and four-lane sums
 //   for four neighbours j at a time:
 //     c  = radial4(c, lanes, pair)        its share of the pair scalar c (times grad W's factor)
@@ -17,12 +18,14 @@
 // The one-pair and the four-pair forms must be the same formula: a pair lands in either.
 // prepare(view) runs once before each sweep (e.g. surface normals); active() false leaves the
 // model out of the sweep; timeStepLimit() is the step its explicit update stays stable at.
+#include "sim/core/Constants.hpp"
 #include "sim/core/Types.hpp"
 #include "sim/scene/SimParams.hpp"
 #include "sim/spatial/NeighborSearch.hpp"
 #include "sim/sph/Gather4.hpp"
 #include "sim/sph/Kernel.hpp"
 
+#include <cmath>
 #include <cstdint>
 #include <vector>
 
@@ -83,6 +86,13 @@ struct WallPair1 {
     Vec3 gradW; ///< grad W(x_ib)
 };
 
+/// The capillary wave time step limit (Brackbill et al. 1992), sqrt(rho0 s^3 / (2 pi sigma))
+/// [s], for a surface tension model; no limit without tension.
+inline double capillaryStepLimit(const PairForceSetup& s) {
+    const double sigma = s.scene->fluid.surfaceTension;
+    return sigma > 0 ? std::sqrt(s.restDensity * s.spacing * s.spacing * s.spacing / (2 * kPi * sigma)) : 1e30;
+}
+
 /// The do-nothing members every model starts from.
 class PairForceModel {
 public:
@@ -90,6 +100,7 @@ public:
     bool active() const { return false; }
     double timeStepLimit() const { return 1e30; }
     void prepare(const PairForceView&) {}
+    Vec3 own(const Vec3& acc, size_t) const { return acc; }
     Lanes lanes(size_t, const PairForceView&) const { return {}; }
 #if defined(__SSE2__)
     template <class L> __m128 radial4(__m128 c, L&, const PairLanes4&) const { return c; }

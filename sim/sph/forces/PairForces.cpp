@@ -6,6 +6,7 @@
 #include "sim/sph/forces/ForceSweep.hpp"
 
 #include "sim/sph/forces/AkinciTension.hpp"
+#include "sim/sph/forces/CurvatureTension.hpp"
 #include "sim/sph/forces/StandardViscosity.hpp"
 
 namespace ferro {
@@ -13,7 +14,7 @@ namespace ferro {
 template <class... Models> struct ModelList {};
 
 using ViscosityModels = ModelList<StandardViscosity>;
-using SurfaceTensionModels = ModelList<AkinciTension>;
+using SurfaceTensionModels = ModelList<AkinciTension, CurvatureTension>;
 
 namespace {
 
