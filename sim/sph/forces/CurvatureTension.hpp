@@ -37,13 +37,14 @@ public:
     static constexpr double kMaxCurvature = 2;
     /// An ambient push sigma kAmbientCurvature / s on the whole surface, and the traction
     /// clamped at zero: the pressure solvers hold the fluid against a push but nothing holds
-    /// a surface particle that is pulled out (their pressure is clamped at zero), and the
-    /// fit's particle-scale noise (about 0.1 / s on a settled layer) would pull single
-    /// particles off a concave spot. A uniform pressure on a closed surface moves nothing in
-    /// an incompressible fluid; it raises the interior pressure by sigma kAmbientCurvature / s.
-    /// Without it a droplet relaxing from a cylinder sheds 24 particles (measured: 
-    /// docs/physics/sph-solver.md, "Surface tension").
-    static constexpr double kAmbientCurvature = 0.5;
+    /// a surface particle that is pulled out (their pressure is clamped at zero). A uniform
+    /// pressure on a closed surface moves nothing in an incompressible fluid (it raises the
+    /// interior pressure by sigma kAmbientCurvature / s), but its share flickers as particles
+    /// enter and leave the surface, and that shakes the surface: at 0.5 / s a 0.5 mm layer
+    /// with no field roughened to 1.2 spacings RMS in 0.4 s (0.16 at 0.25 / s and 0.1 / s).
+    /// Without it (a pull allowed) a droplet relaxing from a cylinder shed 24 particles.
+    /// Measurements: docs/physics/sph-solver.md, "Surface tension".
+    static constexpr double kAmbientCurvature = 0.1;
 
     explicit CurvatureTension(const PairForceSetup& s)
         : sigma_(s.scene->fluid.surfaceTension), rho0_(s.restDensity), V_(Real(s.volume)), s_(Real(s.spacing)),
