@@ -44,8 +44,6 @@ void computeExposure(const FreeSurfaceInput& in, const std::vector<Vec3>& gradC,
 class FlatSurface {
 public:
     FlatSurface(double spacing, double volume);
-    /// |grad c| of the lattice's top layer [1/m].
-    double gradient() const { return gradient_; }
     /// Surface weight in [0, 1] from |grad c|: 0 below a quarter of the flat surface's, 1 from
     /// half of it on (smoothstep between). Not the fill rho / rho0: the pressure solver
     /// squeezes the top layer until its deficient density sum reaches rest density.

@@ -68,7 +68,6 @@ public:
             normal_[i] = weight_[i] > 0 ? Vec3(-gradC_[i] / g) : Vec3::Zero();
         });
         accel_.resize(n);
-        curvature_.resize(n);
         const double scale = sigma_ / (rho0_ * flat_.layerFactor());
         const PeriodicDomain periodic = v.periodic;
         rawCurvature_.resize(n);
@@ -77,7 +76,6 @@ public:
         // noise would otherwise push single particles out of the surface, which no pressure
         // (clamped at zero) holds back.
         forEachParticle(n, [&](size_t i) {
-            curvature_[i] = 0;
             accel_[i] = Vec3::Zero();
             if (!(weight_[i] > 0)) return;
             double sum = double(weight_[i]) * double(v.kernel.W0()) * double(rawCurvature_[i]);
@@ -90,8 +88,7 @@ public:
                 sum += w * double(rawCurvature_[j]);
                 wsum += w;
             }
-            curvature_[i] = Real(sum / wsum);
-            const double traction = std::max(0.0, double(curvature_[i]) + kAmbientCurvature / double(s_));
+            const double traction = std::max(0.0, sum / wsum + kAmbientCurvature / double(s_));
             accel_[i] = (scale * double(weight_[i]) * traction * gradC_[i].cast<double>()).cast<Real>();
         });
     }
@@ -99,8 +96,7 @@ public:
     Vec3 own(const Vec3& acc, size_t i) const { return acc + accel_[i]; }
 
 private:
-    /// div_s n at surface particle i (see the header), clamped to one over a spacing: the
-    /// particles resolve no sharper bend.
+    /// div_s n at surface particle i (see the header), clamped to kMaxCurvature / s.
     Real curvature(const PairForceView& v, const PeriodicDomain& periodic, size_t i) const {
         const Eigen::Vector3d ni = normal_[i].cast<double>();
         // A tangent basis.
@@ -140,7 +136,7 @@ private:
     FlatSurface flat_;
     double stepLimit_;
     std::vector<Vec3> gradC_, normal_, accel_;
-    std::vector<Real> exposure_, weight_, rawCurvature_, curvature_;
+    std::vector<Real> exposure_, weight_, rawCurvature_;
 };
 
 } // namespace ferro
