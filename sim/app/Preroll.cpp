@@ -24,18 +24,19 @@ double rmsSpeed(const FluidSimulation& sim) {
     return sim.size() ? std::sqrt(sum / double(sim.size())) : 0.0;
 }
 
-/// Height the fluid can fall [m]: the walls' extent along gravity, or the fluid's without walls.
+/// Height the fluid can fall [m]: the extent along gravity of the walls and the fluid together
+/// (the walls alone are a flat floor in a box with periodic sides and an open top).
 double fallHeight(const FluidSimulation& sim, const Vec3d& g) {
     const double gn = g.norm();
     if (gn <= 0) return 0;
     const Vec3d down = g / gn;
-    const auto& pts = sim.boundaryPositions().empty() ? sim.positions() : sim.boundaryPositions();
     double lo = std::numeric_limits<double>::infinity(), hi = -lo;
-    for (const Vec3& p : pts) {
-        const double d = down.dot(p.cast<double>());
-        lo = std::min(lo, d);
-        hi = std::max(hi, d);
-    }
+    for (const auto* pts : {&sim.boundaryPositions(), &sim.positions()})
+        for (const Vec3& p : *pts) {
+            const double d = down.dot(p.cast<double>());
+            lo = std::min(lo, d);
+            hi = std::max(hi, d);
+        }
     return hi > lo ? hi - lo : 0.0;
 }
 

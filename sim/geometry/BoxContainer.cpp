@@ -86,8 +86,10 @@ private:
         const Vec3d ext = hi_ - lo_;
         const long nx = std::max(1L, std::lround(ext.x() / spacing)), ny = std::max(1L, std::lround(ext.y() / spacing));
         std::vector<Vec3> out;
-        for (double z : {lo_.z() - offset, hi_.z() + offset}) {
-            if (z > lo_.z() && !closedTop_) break;
+        // The floor always, the lid only on a closed top (chosen by index: with a negative
+        // offset, samples on the fluid side, the floor's z lies above lo.z too).
+        for (int wall = 0; wall < (closedTop_ ? 2 : 1); ++wall) {
+            const double z = wall == 0 ? lo_.z() - offset : hi_.z() + offset;
             for (long j = 0; j < ny; ++j)
                 for (long i = 0; i < nx; ++i)
                     out.push_back(toVec3(Vec3d(lo_.x() + ext.x() * double(i) / double(nx),

@@ -89,6 +89,7 @@ Eigen::Vector3d DipoleTree::centroid() const {
     double v = 0;
     Eigen::Vector3d c = Eigen::Vector3d::Zero();
     for (size_t k = 0; k < size(); ++k) {
+        if (!isTarget(k)) continue; // a periodic copy
         v += vol_[k];
         c += double(vol_[k]) * Eigen::Vector3d(px_[k], py_[k], pz_[k]);
     }
@@ -97,7 +98,8 @@ Eigen::Vector3d DipoleTree::centroid() const {
 
 Eigen::Vector3d DipoleTree::totalMoment() const {
     Eigen::Vector3d m = Eigen::Vector3d::Zero();
-    for (size_t k = 0; k < size(); ++k) m += Eigen::Vector3d(mx_[k], my_[k], mz_[k]);
+    for (size_t k = 0; k < size(); ++k)
+        if (isTarget(k)) m += Eigen::Vector3d(mx_[k], my_[k], mz_[k]); // not a periodic copy
     return scale_ * scale_ * scale_ * m;
 }
 

@@ -20,6 +20,7 @@ void DipoleTree::build(const std::vector<Vec3>& x, const std::vector<Real>& volu
                        int leafSize) {
     targetCount_ = x.size();
     farImages_.setZero();
+    farField_.setZero(); // set again with the magnetization
     if (!periodic() || x.empty()) {
         buildFrom(x, volume, openingAngle, leafSize);
         return;
@@ -503,6 +504,7 @@ void DipoleTree::fieldAtParticlesDirect(const std::vector<uint32_t>& targets, Ei
                 for (int a = 0; a < 3; ++a) H[3 * q + a] += kInv4Pi * double(acc[a]);
             }
             addSurfaceTerm(k, &H[3 * q]);
+            for (int a = 0; a < 3; ++a) H[3 * q + a] += farField_[a]; // periodic: the far copies
         }
     });
 }

@@ -114,7 +114,8 @@ public:
     /// Exact all-particle sum at p (O(N)), double.
     Eigen::Vector3d fieldAtDirect(const Eigen::Vector3d& p) const;
 
-    /// Volume-weighted centroid [m] and total moment sum V M [A m^2] of all particles.
+    /// Volume-weighted centroid [m] and total moment sum V M [A m^2] of the input particles
+    /// (one period's, without the periodic copies).
     Eigen::Vector3d centroid() const;
     Eigen::Vector3d totalMoment() const;
 

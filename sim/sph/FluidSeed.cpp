@@ -83,8 +83,9 @@ RunSize estimateRunSize(const SimScene& scene) {
     case ContainerParams::Type::None: break;
     case ContainerParams::Type::Dish: area = kPi * c.radius * c.radius + 2 * kPi * c.radius * c.height; break;
     case ContainerParams::Type::Box: {
+        // The floor, a lid if closed, the sides unless they are periodic (no walls).
         const Vec3d e = c.max - c.min;
-        area = 2 * (e.x() * e.y() + e.y() * e.z() + e.z() * e.x());
+        area = (c.closedTop ? 2 : 1) * e.x() * e.y() + (c.periodicSides ? 0 : 2 * (e.y() * e.z() + e.z() * e.x()));
         break;
     }
     case ContainerParams::Type::Mesh:

@@ -196,6 +196,27 @@ TEST_CASE("wall samples moved into the solid by an offset", "[container]") {
             REQUIRE_FALSE(box->contains(x, 0)); // outside the fluid region
         }
     }
+    // Periodic sides: only the floor (and a lid) are walls, on either side of the offset's
+    // sign (a negative offset puts the samples on the fluid side, as the magnetic step bound
+    // takes them).
+    for (const bool closedTop : {false, true}) {
+        ContainerParams p = boxParams(closedTop);
+        p.periodicSides = true;
+        const auto box = makeContainer(p, "scene.toml:3");
+        for (const double o : {off, -off}) {
+            size_t floor = 0, lid = 0;
+            for (const Vec3& q : box->sampleWalls(s, o)) {
+                const Vec3d x = q.cast<double>();
+                REQUIRE(x.x() >= p.min.x() - eps);
+                REQUIRE(x.x() < p.max.x() - 0.5 * s); // the face x = max is the face x = min
+                floor += std::abs(x.z() - (p.min.z() - o)) < eps;
+                lid += std::abs(x.z() - (p.max.z() + o)) < eps;
+            }
+            const size_t layer = size_t(std::lround(0.1 / s) * std::lround(0.08 / s));
+            CHECK(floor == layer);
+            CHECK(lid == (closedTop ? layer : 0));
+        }
+    }
     const ContainerParams p = dishParams();
     const auto dish = makeContainer(p, "scene.toml:3");
     for (const Vec3& q : dish->sampleWalls(s, off)) {

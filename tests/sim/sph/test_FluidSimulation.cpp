@@ -412,6 +412,8 @@ TEST_CASE("periodic sides: a layer slides across the glued faces without seam, a
             // Inside the box (wrapped at each search; up to half the skin past a face between).
             REQUIRE(x.x() > -0.5 * s);
             REQUIRE(x.x() < 0.012 + 0.5 * s);
+            REQUIRE(x.y() > -0.5 * s);
+            REQUIRE(x.y() < 0.010 + 0.5 * s);
             if (x.z() > 2.5 * s) continue; // the two lower layers: no free surface
             err = std::max(err, std::abs(r - 1));
             const bool nearFace = x.x() < s || x.x() > 0.012 - s || x.y() < s || x.y() > 0.010 - s;
@@ -435,7 +437,7 @@ TEST_CASE("periodic sides: a layer slides across the glued faces without seam, a
     }
 }
 
-TEST_CASE("periodic sides refuse a box too narrow for the search and a block past the glued faces", "[sph][periodic]") {
+TEST_CASE("periodic sides refuse a box too narrow for the search, a block past the glued faces and a field that does not repeat", "[sph][periodic]") {
     SimScene scene;
     scene.path = "periodic-bad";
     scene.fluid.restDensity = 1000;
@@ -459,4 +461,19 @@ TEST_CASE("periodic sides refuse a box too narrow for the search and a block pas
     SimScene past = scene;
     past.fluid.blocks[0].max.y() = 0.015;
     REQUIRE_THROWS_WITH(FluidSimulation(past), Catch::Contains("fluid outside the box in y"));
+    // A uniform field repeats with the box; a dipole's does not.
+    SimScene field = scene;
+    MagnetTrack uniform;
+    uniform.base.kind = MagnetKind::Uniform;
+    uniform.base.strength = 1000;
+    field.magnets.push_back(uniform);
+    REQUIRE_NOTHROW(FluidSimulation(field));
+    MagnetTrack dipole;
+    dipole.base.kind = MagnetKind::Dipole;
+    dipole.base.position = Vec3d(0.006, 0.006, -0.01);
+    dipole.base.strength = 0.1;
+    field.magnets.push_back(dipole);
+    REQUIRE_THROWS_WITH(FluidSimulation(field),
+                        "periodic-bad: container.periodic_sides: magnets[1] is a dipole; periodic sides take uniform "
+                        "fields only (a source's field does not repeat with the box)");
 }
