@@ -11,7 +11,7 @@
 #   --only AREAS   run only these areas (the other sections already in OUT_DIR are kept)
 #   --no-build     skip scripts/build.sh (use FERRO_BIN or build/bin as they are)
 #   --assemble     run no area: only rewrite OUT_DIR/README.md from the sections in OUT_DIR
-# Areas, in order: sim scaling magnetics surface spikes flow-tips periodic-layer render scene-cost still-frames peer million
+# Areas, in order: sim scaling magnetics surface spikes flow-tips periodic-layer field-sweep render scene-cost still-frames peer million
 # slurm (scripts/bench/<area>.sh; million takes ~30 min, slurm needs --with-slurm;
 # peer needs FERRO_PEER_SRC=/path/to/SPlisHSPlasH and otherwise prints why it is skipped).
 # Environment: BENCH_QUICK=1 (tiny sizes: checks the scripts in minutes, not for the report),
@@ -20,7 +20,7 @@
 set -euo pipefail
 root="$(cd "$(dirname "$0")/.." && pwd)"
 die() { echo "bench.sh: error: $2" >&2; exit "$1"; }
-all_areas=(sim scaling magnetics surface spikes flow-tips periodic-layer render scene-cost still-frames peer million slurm)
+all_areas=(sim scaling magnetics surface spikes flow-tips periodic-layer field-sweep render scene-cost still-frames peer million slurm)
 
 out="" only="" build=1 assemble=0
 while [[ $# -gt 0 ]]; do

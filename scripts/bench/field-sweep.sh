@@ -1,0 +1,152 @@
+#!/usr/bin/env bash
+# field-sweep.sh: a flat layer swept up and down through the critical field with the full force
+# (issue 32): where the pattern appears on the way up, how tall it stands against the field,
+# and where it vanishes on the way down (the hysteresis of the subcritical hexagons).
+#
+#   scripts/bench/field-sweep.sh [OUT_DIR]   (default tests/bench/report; BENCH_QUICK=1:
+#                                             the same sweep, it has no smaller version)
+#
+# scripts/bench/field_sweep.toml (periodic_layer.toml's layer and fluid, csf tension,
+# force = "surface"; 17 plateaus of 0.5 s from 0.8 to 1.3 times the critical 10.42 kA/m and
+# back) at the spacings of $spacings, simulated once (cached in $cache/field-sweep/<hash>).
+# Every frame goes through scripts/bench/rosensweig.py --period; scripts/bench/field_sweep.py
+# averages the second half of each plateau. A 0.5 s plateau cannot tell a pattern that stands
+# from one that sinks slowly near the lower threshold, so the holds of $holds
+# (scripts/bench/field_hold.toml) make the pattern at 1.1 x critical and hold a field below
+# the critical one for 2 s. Costs are ferro-sim's CPU seconds. Writes field_sweep.csv,
+# field_hold.csv, field_sweep.png (the pattern's height against the field, up and down) and
+# field-sweep.md. FIELD_SWEEP_SPACINGS and FIELD_SWEEP_HOLDS override the lists.
+set -euo pipefail
+source "$(dirname "$0")/common.sh"
+bench_init field-sweep "$@"
+bench_need ferro-sim
+
+scene="$root/scripts/bench/field_sweep.toml"
+hold_scene="$root/scripts/bench/field_hold.toml"
+critical=10420
+spacings="${FIELD_SWEEP_SPACINGS:-0.001}"
+# The holds, SPACING:FIELD/CRITICAL[:flat]: the pattern made at 1.1 x critical, then the field
+# held below the critical one for 2 s (field_hold.toml); with "flat" the field goes straight
+# to the held one (from the flat layer, held 2.9 s: the onset, slower than a plateau's 0.5 s).
+holds="${FIELD_SWEEP_HOLDS:-0.001:0.875 0.001:0.9 0.001:0.925 0.001:0.95 0.001:0.975 0.001:0.9:flat 0.001:0.925:flat 0.001:0.95:flat
+  0.00075:0.85 0.00075:0.9 0.00075:0.95 0.00075:0.95:flat}"
+
+# simulate SCENE K=V...: the shot's frames in $dir (cached by scene and sets), CPU s in $cpu.
+simulate() {
+  local scene_file="$1"; shift
+  local sets=() kv
+  for kv in "$@"; do sets+=(--set "$kv"); done
+  dir="$cache/field-sweep/$( (cat "$scene_file"; printf '%s\n' "${sets[@]}") | sha1sum | cut -c1-16)"
+  if [[ ! -f "$dir/done" ]]; then
+    bench_note "simulating $(basename "$scene_file") $* (cached in $dir)"
+    rm -rf "$dir"; mkdir -p "$dir"
+    bench_time cpu nice -n 5 "$bin/ferro-sim" "$scene_file" --out "$dir" "${sets[@]}" --quiet
+    echo "$cpu" > "$dir/done"
+  fi
+  cpu="$(cat "$dir/done")"
+}
+
+echo "spacing_mm,particles,sim_cpu_s,plateau,direction,field_A_m,field_over_critical,frames,rms_h_spacings,peaks,nn_median_mm,height_mm,stands" \
+  > "$out/field_sweep.csv"
+summary=()
+for s in $spacings; do
+  simulate "$scene" "fluid.spacing=$s"
+  n="$(head -c 4000 "$dir/particles_0000.ply" | grep -a -m1 '^element vertex' | awk '{print $3}')"
+  python3 "$root/scripts/bench/rosensweig.py" "$dir" --period 0.024,0.024 --smooth > "$work/pattern.txt"
+  python3 "$root/scripts/bench/field_sweep.py" "$scene" "$work/pattern.txt" "$critical" "$s" \
+    > "$work/plateaus.csv" 2> "$work/summary.txt"
+  tail -n +2 "$work/plateaus.csv" | awk -v s="$s" -v n="$n" -v cpu="$cpu" '{ printf "%g,%d,%.0f,%s\n", s * 1e3, n, cpu, $0 }' \
+    >> "$out/field_sweep.csv"
+  summary+=("- sweep at $(awk -v s="$s" 'BEGIN { printf "%g mm", s * 1e3 }') ($n particles, $(printf '%.0f' "$cpu") CPU s): $(paste -sd';' "$work/summary.txt" | sed 's/;/; /g').")
+done
+
+# The holds: the mean over the hold's last 0.25 s (3.05-3.3 s: the state it ends in; a layer
+# near onset may erupt and sink again on the way) against the pattern at 1.1 x critical just
+# before the fall (0.9-1.2 s).
+echo "spacing_mm,particles,sim_cpu_s,field_over_critical,from,rms_h_spacings,peaks,height_mm,height_before_mm,stands" \
+  > "$out/field_hold.csv"
+for c in $holds; do
+  IFS=: read -r s r from <<< "$c"
+  H="$(awk -v r="$r" -v c="$critical" 'BEGIN { printf "%d", r * c + 0.5 }')"
+  if [[ "$from" == flat ]]; then
+    simulate "$hold_scene" "fluid.spacing=$s" "magnets.0.keys.2.field=$H" "magnets.0.keys.3.field=$H" \
+      "magnets.0.keys.4.field=$H" "magnets.0.keys.5.field=$H"
+  else
+    from=pattern
+    simulate "$hold_scene" "fluid.spacing=$s" "magnets.0.keys.4.field=$H" "magnets.0.keys.5.field=$H"
+  fi
+  n="$(head -c 4000 "$dir/particles_0000.ply" | grep -a -m1 '^element vertex' | awk '{print $3}')"
+  python3 "$root/scripts/bench/rosensweig.py" "$dir" --period 0.024,0.024 --smooth --first 0.899 > "$work/hold.txt"
+  # Columns of rosensweig.py: t mean_h rms_h change detached peaks nn nn/lambda spectrum apex.
+  awk -v s="$s" -v r="$r" -v from="$from" -v n="$n" -v cpu="$cpu" 'NR > 2 {
+      late = $1 >= 3.049; early = $1 <= 1.201
+      if (late) { k++; rms += $3; pk += $6; if ($10 != "nan") h += $10 - $2 }
+      if (early) { e++; if ($10 != "nan") he += $10 - $2 } }
+    END { printf "%g,%d,%.0f,%s,%s,%.3f,%.2f,%.2f,%.2f,%d\n", s * 1e3, n, cpu, r, from, rms / k, pk / k, h / k, he / e,
+          (pk / k >= 1 && rms / k >= 0.35) }' "$work/hold.txt" >> "$out/field_hold.csv"
+done
+# The lower threshold per spacing: between the highest held field whose pattern sank and the
+# lowest one whose pattern stood; and whether a flat layer held below critical stayed flat.
+for s in $(awk -F, 'NR > 1 { print $1 }' "$out/field_hold.csv" | sort -u -g -r); do
+  summary+=("- holds at $s mm: $(awk -F, -v s="$s" 'NR > 1 && $1 == s && $5 == "pattern" {
+      if ($10 == 1) { if (lo == "" || $4 < lo) lo = $4 } else if (hi == "" || $4 > hi) hi = $4 }
+    NR > 1 && $1 == s && $5 == "flat" { flat = flat sprintf("; from flat at %s x critical the layer %s", $4, ($10 == 1 ? "rose" : "stayed flat")) }
+    END { if (lo == "") printf "no held pattern stood"
+          else if (hi == "") printf "every held pattern stood, down to %s x critical", lo
+          else printf "the pattern sank at %s x critical and stood at %s: the lower threshold lies between", hi, lo
+          printf "%s", flat }' "$out/field_hold.csv").")
+done
+
+if command -v gnuplot > /dev/null; then
+  for s in $spacings; do
+    mm="$(awk -v s="$s" 'BEGIN { printf "%g", s * 1e3 }')"
+    awk -F, -v mm="$mm" 'NR > 1 && $1 == mm && $5 == "up" { print $7, $12 }' "$out/field_sweep.csv" > "$work/up_$mm.dat"
+    awk -F, -v mm="$mm" 'NR > 1 && $1 == mm && $5 == "down" { print $7, $12 }' "$out/field_sweep.csv" > "$work/down_$mm.dat"
+  done
+  plots=""
+  for s in $spacings; do
+    mm="$(awk -v s="$s" 'BEGIN { printf "%g", s * 1e3 }')"
+    plots+="'$work/up_$mm.dat' with linespoints title 'up, $mm mm', '$work/down_$mm.dat' with linespoints title 'down, $mm mm', "
+  done
+  gnuplot <<PLOT || bench_note "gnuplot failed: no plot"
+set terminal pngcairo size 640,420
+set output '$out/field_sweep.png'
+set xlabel 'applied field / critical field (10.42 kA/m)'
+set ylabel 'pattern height above the mean surface [mm]'
+set key top left
+set grid
+plot ${plots%, }
+PLOT
+fi
+
+{
+  echo "## Field sweep: the pattern against the field, up and down (issue 32)"
+  echo
+  echo "What ran: \`scripts/bench/field-sweep.sh\` on scripts/bench/field_sweep.toml: the periodic layer"
+  echo "(5 mm, 24 x 24 mm box with periodic sides, examples/rosensweig_uniform.toml's fluid) with the"
+  echo "csf tension and \`force = \"surface\"\`, the field in plateaus of 0.5 s from 0.8 to 1.3 times"
+  echo "the critical 10.42 kA/m and back. Each row is the second half of a plateau: rms_h in"
+  echo "spacings (a settled layer reads 0.13-0.17), the height is the peaks' mean apex above the mean"
+  echo "surface (0 where a frame has no peak); a plateau stands with at least one peak and rms_h >= 0.35."
+  echo
+  printf '%s\n' "${summary[@]}"
+  echo
+  echo "| spacing mm | direction | field / critical | rms_h | peaks | nearest peak mm | height mm | stands |"
+  echo "| ---: | --- | ---: | ---: | ---: | ---: | ---: | --- |"
+  awk -F, 'NR > 1 { printf "| %s | %s | %s | %s | %s | %s | %s | %s |\n", $1, $5, $7, $9, $10, $11, $12, ($13 == 1 ? "yes" : "no") }' \
+    "$out/field_sweep.csv"
+  echo
+  [[ -f "$out/field_sweep.png" ]] && printf '\n%s\n' "![height against field](field_sweep.png)"
+  echo
+  echo "The holds (scripts/bench/field_hold.toml): from \"pattern\", the pattern made at 1.1 x critical"
+  echo "(0.4-1.2 s), then the field held below the critical one for 2 s; from \"flat\", the field"
+  echo "ramped straight to the held one and held 2.9 s. Mean over the last 0.25 s; \"before\" is the"
+  echo "height over 0.9-1.2 s; it stands with at least one peak and rms_h >= 0.35 (a sunk layer"
+  echo "reads 0.3-0.36 here, a settled one 0.13-0.17)."
+  echo
+  echo "| spacing mm | particles | sim CPU s | field / critical | from | rms_h | peaks | height mm | before mm | stands |"
+  echo "| ---: | ---: | ---: | ---: | --- | ---: | ---: | ---: | ---: | --- |"
+  awk -F, 'NR > 1 { printf "| %s | %s | %s | %s | %s | %s | %s | %s | %s | %s |\n", $1, $2, $3, $4, $5, $6, $7, $8, $9, ($10 == 1 ? "yes" : "no") }' \
+    "$out/field_hold.csv"
+} > "$out/field-sweep.md"
+bench_note "wrote $out/field_sweep.csv and $out/field-sweep.md"
