@@ -11,7 +11,7 @@
 
 using namespace ferro;
 
-TEST_CASE("periodic wrap lands in [lo, lo + period) and is idempotent, next to the faces too",
+TEST_CASE("periodic wrap lands in the box, from lo up to lo + period, and is idempotent, next to the faces too",
           "[spatial][periodic]") {
     // Off-centre faces, as a box from a scene: lo is not 0, so x - lo is rounded.
     const Vec3 lo(-0.0117f, 0.0031f, 0), hi(0.0123f, 0.0271f, 0.01f);
