@@ -925,15 +925,28 @@ static BernoulliCheck finePoolBernoulli(double chi0, const std::string& fit, dou
 
 // Issue 13's must-show on the pool at 10,240 particles with the default (free-surface) curve
 // fit, ~2 CPU minutes a case. Reference: the ferrohydrostatic Bernoulli law; bound: the
-// issue's 10 % of the rise (measured 3.0 % and 5.8 % after 1.5 s of settling, RMS speed 0.62
-// and 0.72 mm/s; 4.4 % and 4.5 % after 2 s: docs/physics/magnetization.md, "Tested accuracy").
-TEST_CASE("a finer pool over a still magnet keeps to the Bernoulli law within 10 % of its rise (chi0 0.5 and 1.5)",
+// issue's 10 % of the rise (measured 3.0 % and 5.8 % at chi0 0.5 and 1.5 after 1.5 s of
+// settling, RMS speed 0.62 and 0.72 mm/s; 4.4 % and 4.5 % after 2 s: docs/physics/
+// magnetization.md, "Tested accuracy"). Since 2026-12-05 the suite runs chi0 1.5 only, the
+// case where the traction matters most and the law is met by the narrower margin, to buy
+// back suite time; chi0 0.5 stays held on the 2,560-particle pool above and runs here with
+// the hidden tag: ferro_sph_tests "[.chi0-0.5]".
+TEST_CASE("a finer pool over a still magnet keeps to the Bernoulli law within 10 % of its rise (chi0 1.5)",
           "[magnetics][slow]") {
-    const double chi0 = GENERATE(0.5, 1.5);
+    const double chi0 = 1.5;
     double rms = 0;
     const BernoulliCheck law = finePoolBernoulli(chi0, "free_surface", rms);
     REQUIRE(rms < 0.001);
     REQUIRE(law.traction > 0.2 * law.pressure);   // the traction term matters here
+    REQUIRE(law.worst < 0.10 * law.rise);
+}
+
+TEST_CASE("a finer pool over a still magnet keeps to the Bernoulli law within 10 % of its rise (chi0 0.5)",
+          "[magnetics][slow][.chi0-0.5]") {
+    double rms = 0;
+    const BernoulliCheck law = finePoolBernoulli(0.5, "free_surface", rms);
+    REQUIRE(rms < 0.001);
+    REQUIRE(law.traction > 0.2 * law.pressure);
     REQUIRE(law.worst < 0.10 * law.rise);
 }
 

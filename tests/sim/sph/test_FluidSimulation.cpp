@@ -79,8 +79,8 @@ void checkResting(FluidSimulation& sim, double depth) {
 
 } // namespace
 
-TEST_CASE("resting tank (DFSPH): density, bottom pressure, volume drift over 3 s", "[sph][slow]") {
-    SimScene scene = loadSimScene(example("hydrostatic.toml"), {"shot.duration=4"});
+TEST_CASE("resting tank (DFSPH): density, bottom pressure, volume drift over 2 s", "[sph][slow]") {
+    SimScene scene = loadSimScene(example("hydrostatic.toml"), {"shot.duration=3"});
     FluidSimulation sim(scene);
     // Fluid depth: particle volume times count over the floor area.
     const double depth = sim.size() * sim.particleMass() / sim.restDensity() / (0.05 * 0.05);
@@ -91,11 +91,13 @@ TEST_CASE("resting tank (DFSPH): density, bottom pressure, volume drift over 3 s
     sim.advanceTo(0.5);
     const double z0 = meanZ(sim);
     double worst = 0;
-    for (int k = 1; k <= 6; ++k) {
+    for (int k = 1; k <= 4; ++k) {
         sim.advanceTo(0.5 + 0.5 * k);
         worst = std::max(worst, std::abs(meanZ(sim) / z0 - 1));
-        if (k == 3) checkResting(sim, depth);
+        if (k == 2) checkResting(sim, depth);
     }
+    // Measured 2026-12-05: 0.033 % over 2 s (81 CPU s). It ran 3 s until then; the last second
+    // was cut to buy back suite time.
     CAPTURE(worst);
     REQUIRE(worst < 0.01);
     checkResting(sim, depth);
