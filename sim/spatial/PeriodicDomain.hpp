@@ -63,7 +63,7 @@ struct PeriodicDomain {
             x[a] -= period[a] * std::floor((x[a] - lo[a]) * inverse[a]);
             // (x - lo) / period rounds to a whole number just inside either face: fold back.
             if (x[a] < lo[a]) x[a] += period[a];
-            if (!(x[a] < top)) x[a] = lo[a];
+            if (x[a] >= top) x[a] = lo[a]; // (a NaN stays NaN: the sanity guard reports it)
         }
     }
 #if defined(__SSE2__)
