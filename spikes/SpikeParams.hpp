@@ -78,7 +78,7 @@ struct SpikeParams {
     double lowerThreshold = 0.9;     ///< M_s / M_c of the bifurcation curve, in [0.5, 1]: spikes that
                                      ///< stand collapse below M_s; 1 = no hysteresis (then no jump).
                                      ///< 0.9: where the full-force layer's pattern sank as the
-                                     ///< field was held lower (bench field-sweep: 0.875-0.9 at
+                                     ///< field was held lower (bench field-sweep: 0.9-0.925 at
                                      ///< 1 mm, 0.85-0.9 at 0.75 mm; docs/physics/magnetization.md)
     double magnetizationFade = 0.25; ///< height ramps from 0 at |M| = M_c to full at (1 + fade) M_c
     /// Spikes follow the field with this time constant [s], >= 0: a spike's height is the
