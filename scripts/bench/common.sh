@@ -69,6 +69,24 @@ kv() { tr ' ' '\n' <<< "$2" | sed -n "s/^$1=//p" | head -n 1; }
 # calc EXPR: floating-point arithmetic through awk, e.g. calc "100 * ($a - $b) / $b".
 calc() { awk "BEGIN { printf \"%.6g\", $1 }"; }
 
+# bench_cached_shot SUBDIR SCENE [K=V]...: ferro-sim's frames of SCENE with `--set K=V` each, in
+# $dir = $cache/SUBDIR/<hash of the scene text and the sets>, simulated once (a directory
+# without its `done` file is run again); its CPU seconds in $cpu. The key leaves out the
+# binary: after a rebuild that changes the simulation, clear $cache/SUBDIR.
+bench_cached_shot() {
+  local sub="$1" scene_file="$2"; shift 2
+  local sets=() kv
+  for kv in "$@"; do sets+=(--set "$kv"); done
+  dir="$cache/$sub/$( (cat "$scene_file"; printf '%s\n' "${sets[@]}") | sha1sum | cut -c1-16)"
+  if [[ ! -f "$dir/done" ]]; then
+    bench_note "simulating $(basename "$scene_file") $* (cached in $dir)"
+    rm -rf "$dir"; mkdir -p "$dir"
+    bench_time cpu nice -n 5 "$bin/ferro-sim" "$scene_file" --out "$dir" "${sets[@]}" --quiet
+    echo "$cpu" > "$dir/done"
+  fi
+  cpu="$(cat "$dir/done")"
+}
+
 # bench_settled_frame VAR SCENE [--set K=V]...: a settled frame 0 of SCENE (ferro-sim with its
 # [shot] preroll and --max-frames 0), cached in $cache/frames/<hash of the scene text and the
 # overrides>/particles_0000.ply and reused while they are unchanged; VAR gets its path.

@@ -31,20 +31,8 @@ spacings="${FIELD_SWEEP_SPACINGS:-0.001}"
 holds="${FIELD_SWEEP_HOLDS:-0.001:0.875 0.001:0.9 0.001:0.925 0.001:0.95 0.001:0.975 0.001:0.9:flat 0.001:0.925:flat 0.001:0.95:flat
   0.00075:0.85 0.00075:0.9 0.00075:0.95 0.00075:0.95:flat}"
 
-# simulate SCENE K=V...: the shot's frames in $dir (cached by scene and sets), CPU s in $cpu.
-simulate() {
-  local scene_file="$1"; shift
-  local sets=() kv
-  for kv in "$@"; do sets+=(--set "$kv"); done
-  dir="$cache/field-sweep/$( (cat "$scene_file"; printf '%s\n' "${sets[@]}") | sha1sum | cut -c1-16)"
-  if [[ ! -f "$dir/done" ]]; then
-    bench_note "simulating $(basename "$scene_file") $* (cached in $dir)"
-    rm -rf "$dir"; mkdir -p "$dir"
-    bench_time cpu nice -n 5 "$bin/ferro-sim" "$scene_file" --out "$dir" "${sets[@]}" --quiet
-    echo "$cpu" > "$dir/done"
-  fi
-  cpu="$(cat "$dir/done")"
-}
+# simulate SCENE K=V...: bench_cached_shot in $cache/field-sweep.
+simulate() { bench_cached_shot field-sweep "$@"; }
 
 echo "spacing_mm,particles,sim_cpu_s,plateau,direction,field_A_m,field_over_critical,frames,rms_h_spacings,peaks,nn_median_mm,height_mm,stands" \
   > "$out/field_sweep.csv"

@@ -33,16 +33,7 @@ cases="0.001:5210 0.001:6773 0.001:8340 0.001:10420 0.001:15600 0.00075:8340 0.0
 # run SPACING FIELD [K=V...]: the shot's frames in $dir (cached), its CPU seconds in $cpu.
 run() {
   local s="$1" H="$2"; shift 2
-  local sets=(--set "fluid.spacing=$s" --set "magnets.0.field=$H" --set "magnets.0.keys.2.field=$H")
-  for kv in "$@"; do sets+=(--set "$kv"); done
-  dir="$cache/periodic-layer/$( (cat "$scene"; printf '%s\n' "${sets[@]}") | sha1sum | cut -c1-16)"
-  if [[ ! -f "$dir/done" ]]; then
-    bench_note "simulating spacing $s m, field $H A/m $* (cached in $dir)"
-    rm -rf "$dir"; mkdir -p "$dir"
-    bench_time cpu nice -n 5 "$bin/ferro-sim" "$scene" --out "$dir" "${sets[@]}" --quiet
-    echo "$cpu" > "$dir/done"
-  fi
-  cpu="$(cat "$dir/done")"
+  bench_cached_shot periodic-layer "$scene" "fluid.spacing=$s" "magnets.0.field=$H" "magnets.0.keys.2.field=$H" "$@"
 }
 
 echo "tension_model,spacing_mm,field_A_m,field_over_critical,particles,sim_cpu_s,rms_h_spacings,peaks,nn_median_mm,nn_over_lambda_c,apex_mm,mean_h_mm" \
