@@ -14,8 +14,10 @@
 # from one that sinks slowly near the lower threshold, so the holds of $holds
 # (scripts/bench/field_hold.toml) make the pattern at 1.1 x critical and hold a field below
 # the critical one for 2 s. Costs are ferro-sim's CPU seconds. Writes field_sweep.csv,
-# field_hold.csv, field_sweep.png (the pattern's height against the field, up and down) and
-# field-sweep.md. FIELD_SWEEP_SPACINGS and FIELD_SWEEP_HOLDS override the lists.
+# field_hold.csv, field_sweep.png (the pattern's height against the field, up and down),
+# field_profile.csv and field_profile.png (the standing plateaus' spike shape against the
+# fundamental Fourier mode, scripts/bench/spike_profile.py) and field-sweep.md.
+# FIELD_SWEEP_SPACINGS and FIELD_SWEEP_HOLDS override the lists.
 set -euo pipefail
 source "$(dirname "$0")/common.sh"
 bench_init field-sweep "$@"
@@ -36,6 +38,8 @@ simulate() { bench_cached_shot field-sweep "$@"; }
 
 echo "spacing_mm,particles,sim_cpu_s,plateau,direction,field_A_m,field_over_critical,frames,rms_h_spacings,peaks,nn_median_mm,height_mm,stands" \
   > "$out/field_sweep.csv"
+echo "spacing_mm,direction,field_over_critical,frames,ptp_mm,lambda_mm,dev_max,dev_rms,harmonic,move" > "$out/field_profile.csv"
+echo "spacing_mm,label,distance_mm,surface_mm,fundamental_mm" > "$out/field_profile_cut.csv"
 summary=()
 for s in $spacings; do
   simulate "$scene" "fluid.spacing=$s"
@@ -46,6 +50,19 @@ for s in $spacings; do
   tail -n +2 "$work/plateaus.csv" | awk -v s="$s" -v n="$n" -v cpu="$cpu" '{ printf "%g,%d,%.0f,%s\n", s * 1e3, n, cpu, $0 }' \
     >> "$out/field_sweep.csv"
   summary+=("- sweep at $(awk -v s="$s" 'BEGIN { printf "%g mm", s * 1e3 }') ($n particles, $(printf '%.0f' "$cpu") CPU s): $(paste -sd';' "$work/summary.txt" | sed 's/;/; /g').")
+  # The standing plateaus' spike shape against the fundamental Fourier mode (Gollwitzer et al.
+  # 2007: within 10 % up to 40 % above onset), each frame of the plateau's second half.
+  windows=()
+  while IFS= read -r w; do windows+=(--window "$w"); done < <(
+    paste -d' ' <(python3 "$root/scripts/bench/field_sweep.py" "$scene" --windows "$critical") \
+                 <(tail -n +2 "$work/plateaus.csv" | cut -d, -f10) | awk '$2 == 1 { print $1 }')
+  if (( ${#windows[@]} )); then
+    python3 "$root/scripts/bench/spike_profile.py" "$dir" --period 0.024,0.024 "${windows[@]}" \
+      --profile-csv "$work/cut.csv" > "$work/profile.txt"
+    awk -v s="$s" 'NR > 1 { split($1, l, "_"); printf "%g,%s,%s,%s,%s,%s,%s,%s,%s,%s\n", s * 1e3, l[1], l[2], $2, $3, $4, $5, $6, $7, $8 }' \
+      "$work/profile.txt" >> "$out/field_profile.csv"
+    tail -n +2 "$work/cut.csv" | awk -v s="$s" '{ printf "%g,%s\n", s * 1e3, $0 }' >> "$out/field_profile_cut.csv"
+  fi
 done
 
 # The holds: the mean over the hold's last 0.25 s (3.05-3.3 s: the state it ends in; a layer
@@ -107,6 +124,24 @@ plot ${plots%, }
 PLOT
 fi
 
+# One spike's profile: the cut through the tallest peak of the last frame at 1.1 x critical on
+# the way up, the surface against its fundamental Fourier mode.
+python3 "$root/scripts/bench/spike_profile.py" --procedural 1,1.25,1.5,2,3 > "$work/procedural.txt"
+first_mm="$(awk -v s="${spacings%% *}" 'BEGIN { printf "%g", s * 1e3 }')"
+awk -F, -v mm="$first_mm" 'NR > 1 && $1 == mm && $2 == "up_1.1" { print $3, $4, $5 }' "$out/field_profile_cut.csv" > "$work/cut_1.1.dat"
+if command -v gnuplot > /dev/null && [[ -s "$work/cut_1.1.dat" ]]; then
+  gnuplot <<PLOT || bench_note "gnuplot failed: no profile plot"
+set terminal pngcairo size 640,420
+set output '$out/field_profile.png'
+set xlabel 'distance from the tip toward the nearest peak [mm]'
+set ylabel 'surface height above the floor [mm]'
+set key top left
+set grid
+plot '$work/cut_1.1.dat' using 1:2 with lines lw 2 title 'simulated, $first_mm mm, 1.1 x critical (up)', \
+     '$work/cut_1.1.dat' using 1:3 with lines dt 2 title 'its fundamental Fourier mode'
+PLOT
+fi
+
 {
   echo "## Field sweep: the pattern against the field, up and down (issue 32)"
   echo
@@ -136,5 +171,31 @@ fi
   echo "| ---: | ---: | ---: | ---: | --- | ---: | ---: | ---: | ---: | --- |"
   awk -F, 'NR > 1 { printf "| %s | %s | %s | %s | %s | %s | %s | %s | %s | %s |\n", $1, $2, $3, $4, $5, $6, $7, $8, $9, ($10 == 1 ? "yes" : "no") }' \
     "$out/field_hold.csv"
+  echo
+  echo "### The spike's shape against the fundamental Fourier mode"
+  echo
+  echo "Gollwitzer et al. (J. Fluid Mech. 2007, arXiv nlin/0604009) measured that the fundamental"
+  echo "Fourier mode (the sum of three cosines of the paper's eq. 13) approximates a spike's shape to"
+  echo "within 10 % up to 40 % above onset. \`scripts/bench/spike_profile.py\` measures the same on the"
+  echo "standing plateaus above: the surface (the colour field's 0.5 level on a half-spacing grid), its"
+  echo "fundamental (the band of box modes within 0.75-1.3 of the wavenumber that holds the most"
+  echo "power), and per frame: ptp, the surface's peak-to-trough height; lambda, the band's"
+  echo "wavelength (lambda_c = 9.16 mm); dev_max, the largest deviation from the fundamental over ptp"
+  echo "(the lab's \"within 10 %\"); dev_rms; harmonic, the share of the pattern's variance outside the"
+  echo "fundamental; move, the RMS change between frames over ptp (a still surface reads about 0.01)."
+  echo "Means over the plateau's second half."
+  echo
+  echo "| spacing mm | direction | field / critical | frames | ptp mm | lambda mm | dev_max | dev_rms | harmonic | move |"
+  echo "| ---: | --- | ---: | ---: | ---: | ---: | ---: | ---: | ---: | ---: |"
+  awk -F, 'NR > 1 { printf "| %s | %s | %s | %s | %s | %s | %s | %s | %s | %s |\n", $1, $2, $3, $4, $5, $6, $7, $8, $9, $10 }' \
+    "$out/field_profile.csv"
+  echo
+  [[ -f "$out/field_profile.png" ]] && printf '%s\n\n' "![one spike's profile](field_profile.png)"
+  echo "Ferro's procedural profile (spikes/SpikePhysics.hpp, hexProfile sharpened with exponent p, the"
+  echo "\`sharpness\` key) by the same measures, on one periodic cell of its lattice:"
+  echo
+  echo "| sharpness p | dev_max | dev_rms | harmonic |"
+  echo "| ---: | ---: | ---: | ---: |"
+  awk 'NR > 1 { printf "| %s | %s | %s | %s |\n", $1, $2, $3, $4 }' "$work/procedural.txt"
 } > "$out/field-sweep.md"
 bench_note "wrote $out/field_sweep.csv and $out/field-sweep.md"

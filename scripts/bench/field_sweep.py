@@ -3,6 +3,10 @@
 on the way up and down.
 
     scripts/bench/field_sweep.py SCENE.toml PATTERN.txt CRITICAL_A_M SPACING_M > plateaus.csv
+    scripts/bench/field_sweep.py SCENE.toml --windows CRITICAL_A_M
+
+--windows prints each plateau's second half as DIRECTION_FIELD/CRITICAL:T0:T1 (the windows
+of scripts/bench/spike_profile.py).
 
 SCENE.toml: the swept scene; its first magnet's keys come in pairs, (reached, left) at one
 field, after two keys at zero field (the settling). PATTERN.txt: scripts/bench/rosensweig.py
@@ -35,9 +39,20 @@ def plateaus(scene_path):
     return out
 
 
+def windows(scene, critical):
+    previous = None
+    for reached, left, field in plateaus(scene):
+        direction = "up" if previous is None or field > previous else "down"
+        previous = field
+        print("%s_%.3g:%.4f:%.4f" % (direction, field / critical, 0.5 * (reached + left), left))
+
+
 def main():
+    if len(sys.argv) == 4 and sys.argv[2] == "--windows":
+        windows(sys.argv[1], float(sys.argv[3]))
+        return
     if len(sys.argv) != 5:
-        sys.exit("usage: field_sweep.py SCENE.toml PATTERN.txt CRITICAL_A_M SPACING_M")
+        sys.exit("usage: field_sweep.py SCENE.toml PATTERN.txt CRITICAL_A_M SPACING_M | SCENE.toml --windows CRITICAL_A_M")
     scene, pattern, critical, spacing = sys.argv[1], sys.argv[2], float(sys.argv[3]), float(sys.argv[4])
     rows = []
     with open(pattern) as f:
