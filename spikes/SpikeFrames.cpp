@@ -46,6 +46,7 @@ SpikeScene parseSpikeScene(const SceneDocument& doc)
     SpikeFluid& fluid = scene.fluid;
     fluid.density = sim.fluid.restDensity;
     fluid.surfaceTension = sim.fluid.surfaceTension;
+    fluid.viscosity = sim.fluid.viscosity;
     fluid.gravity = sim.solver.gravity;
     fluid.law = sim.magnetization;
     fluid.particleSpacing = sim.fluid.spacing;

@@ -117,15 +117,32 @@ bool patternOrigin(const PlacementContext& c, const Magnet& magnet, const Vec3d&
 
 // The tip spacing l [m], clamped to [P.minSpacing, P.maxSpacing]: eq. 15, l = alpha / |H(x0)|
 // with |H0| [A/m] at the origin (SurfaceFields::fieldHistoryPeak: the strongest of the growth
-// time's history), or the tip distance of the critical wavenumber
-// k = 2 pi / lambda_c (g [m/s^2]) on the planform: 2 lambda_c / sqrt3 on a hexagon, lambda_c
-// on a square.
-double tipSpacing(const SpikeInput& in, const SpikeParams& P, double g, double H0, SpikeParams::Lattice lattice)
+// time's history), or the tip distance of a wavenumber k on the planform (4 pi / (sqrt3 k) on a
+// hexagon, 2 pi / k on a square): the critical k_c = 2 pi / lambda_c, or the fastest-growing
+// one at M0 [A/m] (the strongest |M| of the growth time) against Mc [A/m]. g [m/s^2].
+double tipSpacing(const SpikeInput& in, const SpikeParams& P, double g, double H0, double M0, double Mc,
+                  SpikeParams::Lattice lattice)
 {
-    const double lambda = criticalWavelength(in.fluid.density - P.ambientDensity, g, in.fluid.surfaceTension);
-    double l = P.spacing == SpikeParams::Spacing::Paper  ? P.alpha / std::max(H0, 1e-30)
-               : lattice == SpikeParams::Lattice::Square ? lambda
-                                                         : 2.0 / std::sqrt(3.0) * lambda;
+    double l = 0;
+    if (P.spacing == SpikeParams::Spacing::Paper) {
+        l = P.alpha / std::max(H0, 1e-30);
+    } else {
+        const double lambda = criticalWavelength(in.fluid.density - P.ambientDensity, g, in.fluid.surfaceTension);
+        double k = lambda > 0 ? 2 * kPi / lambda : 0;
+        if (P.spacing == SpikeParams::Spacing::Growth && std::isfinite(Mc) && Mc > 0) {
+            SurfaceModes modes;
+            modes.density = in.fluid.density;
+            modes.deltaRho = in.fluid.density - P.ambientDensity;
+            modes.gravity = g;
+            modes.surfaceTension = in.fluid.surfaceTension;
+            modes.viscosity = in.fluid.viscosity;
+            modes.supercriticality = (M0 / Mc) * (M0 / Mc);
+            k = fastestGrowingWavenumber(modes);
+        }
+        l = !(k > 0)                                    ? 0.0
+            : lattice == SpikeParams::Lattice::Square ? 2 * kPi / k
+                                                      : tipSpacingForWavenumber(k);
+    }
     return std::clamp(l, P.minSpacing, P.maxSpacing);
 }
 
@@ -175,7 +192,7 @@ std::vector<Pattern> placePatterns(const PlacementContext& c, double g, double M
         pat.info.field = H0.norm();
         pat.info.magnetization = M0;
         pat.info.lattice = c.P.latticeOf(int(m));
-        pat.info.spacing = tipSpacing(in, c.P, g, c.fields.fieldHistoryPeak(x0, n0, H0), pat.info.lattice);
+        pat.info.spacing = tipSpacing(in, c.P, g, c.fields.fieldHistoryPeak(x0, n0, H0), M0, Mc, pat.info.lattice);
         pat.info.axis = latticeAxis(n0, c.P.orientation);
         bool duplicate = false;
         for (const Pattern& other : patterns)

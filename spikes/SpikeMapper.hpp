@@ -44,6 +44,7 @@ class SurfaceFlowHistory;
 struct SpikeFluid {
     double density = 1000.0;        ///< rho [kg/m^3]
     double surfaceTension = 0.0;    ///< sigma [N/m]
+    double viscosity = 0.0;         ///< kinematic nu [m^2/s] (the fastest-growing wavenumber)
     Vec3d gravity{0, 0, -9.81};     ///< [m/s^2]
     MagnetizationParams law;        ///< chi0, Ms
     std::shared_ptr<const Container> container; ///< wetted walls; null = every surface is free

@@ -34,8 +34,10 @@ SpikeParams parseSpikeParams(const SceneDocument& doc)
     TableReader r = doc.section("spikes");
     SpikeParams p;
     p.enabled = r.boolean("enabled", p.enabled);
-    p.spacing = r.choice("spacing", {"paper", "physical"}, "paper") == "physical" ? SpikeParams::Spacing::Physical
-                                                                                 : SpikeParams::Spacing::Paper;
+    const std::string spacing = r.choice("spacing", {"paper", "physical", "growth"}, "paper");
+    p.spacing = spacing == "physical" ? SpikeParams::Spacing::Physical
+                : spacing == "growth" ? SpikeParams::Spacing::Growth
+                                      : SpikeParams::Spacing::Paper;
     p.alpha = r.positive("alpha", p.alpha);
     p.beta = r.nonNegative("beta", p.beta);
     p.minSpacing = r.positive("min_spacing", p.minSpacing);

@@ -65,6 +65,56 @@ double criticalWavelength(double deltaRho, double gravity, double surfaceTension
     return 2.0 * kPi * std::sqrt(std::max(0.0, surfaceTension) / (deltaRho * gravity));
 }
 
+double growthRate(const SurfaceModes& m, double k)
+{
+    if (!(k > 0) || !(m.density > 0)) return 0.0;
+    const double capillary = std::sqrt(std::max(0.0, m.gravity * m.deltaRho * m.surfaceTension));
+    const double magnetic = 2.0 * capillary * m.supercriticality; // mu0 M^2 / (1 + 1/r0)
+    const double w02 = (m.deltaRho * m.gravity * k + m.surfaceTension * k * k * k - magnetic * k * k) / m.density;
+    if (!(w02 < 0)) return 0.0;
+    const double inviscid = std::sqrt(-w02);
+    const double nu = std::max(0.0, m.viscosity);
+    if (nu == 0) return inviscid;
+    // F(s) = (s + 2 nu k^2)^2 + w0^2 - 4 nu^2 k^3 sqrt(k^2 + s / nu) rises monotonically in s
+    // (F' >= 2 s + 2 nu k^2 since sqrt(k^2 + s / nu) >= k), from w0^2 < 0 at s = 0 to
+    // >= 2 nu k^2 s > 0 at the inviscid rate: one root, by bisection.
+    const auto F = [&](double s) {
+        const double a = s + 2 * nu * k * k;
+        return a * a + w02 - 4 * nu * nu * k * k * k * std::sqrt(k * k + s / nu);
+    };
+    double lo = 0, hi = inviscid;
+    for (int i = 0; i < 200 && hi - lo > 1e-14 * inviscid; ++i) {
+        const double mid = 0.5 * (lo + hi);
+        (F(mid) < 0 ? lo : hi) = mid;
+    }
+    return 0.5 * (lo + hi);
+}
+
+double fastestGrowingWavenumber(const SurfaceModes& m)
+{
+    if (!(m.gravity * m.deltaRho > 0) || !(m.surfaceTension > 0)) return 0.0;
+    const double kc = std::sqrt(m.deltaRho * m.gravity / m.surfaceTension);
+    const double q = m.supercriticality;
+    if (!(q > 1)) return kc;
+    // The unstable band: sigma k^2 - C k + delta_rho g < 0 with C = 2 sqrt(g delta_rho sigma) q,
+    // i.e. k / k_c in q -+ sqrt(q^2 - 1). The rate is unimodal over it: golden-section search.
+    const double root = std::sqrt(q * q - 1);
+    double a = kc * (q - root), b = kc * (q + root);
+    const double r = 0.5 * (std::sqrt(5.0) - 1);
+    double c = b - r * (b - a), d = a + r * (b - a);
+    double fc = growthRate(m, c), fd = growthRate(m, d);
+    for (int i = 0; i < 200 && b - a > 1e-12 * kc; ++i) {
+        if (fc < fd) {
+            a = c, c = d, fc = fd;
+            d = a + r * (b - a), fd = growthRate(m, d);
+        } else {
+            b = d, d = c, fd = fc;
+            c = b - r * (b - a), fc = growthRate(m, c);
+        }
+    }
+    return 0.5 * (a + b);
+}
+
 double hexProfile(double a, double b)
 {
     return std::cos(2 * kPi * (a + b)) + std::cos(2 * kPi * a) + std::cos(2 * kPi * b);

@@ -33,6 +33,34 @@ CriticalMagnetization criticalMagnetization(double deltaRho, double gravity, dou
 /// Critical wavelength lambda_c = 2 pi sqrt(sigma / (delta_rho g)) [m] (capillary length times 2 pi).
 double criticalWavelength(double deltaRho, double gravity, double surfaceTension);
 
+/// A deep layer's surface modes in a normal field, for linear stability theory.
+struct SurfaceModes {
+    double density = 1000;       ///< rho, the inertia [kg/m^3]
+    double deltaRho = 1000;      ///< fluid - ambient density [kg/m^3]
+    double gravity = 9.81;       ///< [m/s^2]
+    double surfaceTension = 0.025; ///< sigma [N/m]
+    double viscosity = 0;        ///< kinematic nu [m^2/s], >= 0
+    double supercriticality = 1; ///< (M / M_c)^2: the magnetic term mu0 M^2 / (1 + 1/r0) with r0
+                                 ///< taken at M_c, so it is 2 sqrt(g delta_rho sigma) (M / M_c)^2
+};
+
+/// The growth rate s [1/s] of the mode of wavenumber k [1/m] on an infinitely deep layer
+/// (Lange, Reimann & Richter 2000, "Wave number of maximal growth in viscous magnetic fluids
+/// of arbitrary depth", in the deep limit): the root s >= 0 of
+///     (s + 2 nu k^2)^2 + w0^2 = 4 nu^2 k^3 sqrt(k^2 + s / nu),
+///     rho w0^2 = delta_rho g k + sigma k^3 - mu0 M^2 k^2 / (1 + 1/r0),
+/// s = sqrt(-w0^2) without viscosity. 0 where the mode is stable (w0^2 >= 0).
+double growthRate(const SurfaceModes& modes, double k);
+
+/// The wavenumber of fastest growth [1/m]: the pattern a flat layer forms after the field jumps
+/// above critical. Reimann, Richter, Rehberg & Lange (Phys. Rev. E 61, 5528, 2000) measured
+/// that wavenumber after jumps of the field and found it grows linearly with the induction, as
+/// this theory gives. k_c = sqrt(delta_rho g / sigma) at or below M_c. Inviscid it is
+/// k_c (2 m + sqrt(4 m^2 - 3)) / 3 with m = (M / M_c)^2; a very viscous deep layer keeps k_c
+/// (its growth rate, (mu0 M^2 k / (1 + 1/r0) - delta_rho g - sigma k^2) / (2 rho nu), peaks
+/// there). Returns 0 without gravity or tension.
+double fastestGrowingWavenumber(const SurfaceModes& modes);
+
 /// Distance between neighbouring peaks of eq. 13 for wavenumber k: 4 pi / (sqrt(3) k).
 inline double tipSpacingForWavenumber(double k) { return 4.0 * kPi / (1.7320508075688772 * k); }
 /// Inverse of tipSpacingForWavenumber.

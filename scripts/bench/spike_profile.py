@@ -185,6 +185,7 @@ def bilinear(field, grid, x, y):
     v = (y / grid.ly * grid.ny - 0.5) % grid.ny
     i, j = int(u), int(v)
     fu, fv = u - i, v - j
+    i, j = i % grid.nx, j % grid.ny   # u % nx can round up to nx itself
     i1, j1 = (i + 1) % grid.nx, (j + 1) % grid.ny
     return ((1 - fu) * (1 - fv) * field[i][j] + fu * (1 - fv) * field[i1][j] +
             (1 - fu) * fv * field[i][j1] + fu * fv * field[i1][j1])

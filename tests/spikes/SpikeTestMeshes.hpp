@@ -3,6 +3,7 @@
 // tests do not depend on ferro-surface.
 #include "sim/core/TriangleMesh.hpp"
 #include "sim/core/Constants.hpp"
+#include "spikes/SpikeFrames.hpp"
 
 #include <cmath>
 #include <functional>
@@ -24,6 +25,24 @@ inline std::string dishScene(double R, const std::string& extra)
       << "[magnetization]\nsusceptibility = 1.5\nsaturation = 35000.0\n"
       << extra;
     return s.str();
+}
+
+/// The scene text of one uniform vertical field H [A/m].
+inline std::string uniformField(double H)
+{
+    std::ostringstream s;
+    s << "[[magnets]]\nkind = \"uniform\"\ndirection = [0.0, 0.0, 1.0]\nfield = " << H << "\n";
+    return s.str();
+}
+
+/// ferro-spikes' input for `mesh` in scene `sc` at time t [s] (the magnets there), no particles.
+inline SpikeInput frameInput(const SpikeScene& sc, const TriangleMesh& mesh, double time = 0.0)
+{
+    SpikeInput in;
+    in.surface = mesh;
+    in.fluid = sc.fluid;
+    for (const MagnetTrack& t : sc.magnets) in.magnets.push_back(t.at(time));
+    return in;
 }
 
 /// A closed cylinder of fluid ("a dish's pool"): floor at z = 0, axis +z through `center`,

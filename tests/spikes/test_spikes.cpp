@@ -23,7 +23,9 @@
 
 using namespace ferro;
 using spiketest::dishScene;
+using spiketest::frameInput;
 using spiketest::makeFlatPool;
+using spiketest::uniformField;
 
 namespace {
 
@@ -36,13 +38,6 @@ std::string dipolePair(double x1, double z1, double x2, double z2, double moment
     for (const auto& [x, z] : {std::make_pair(x1, z1), std::make_pair(x2, z2)})
         s << "[[magnets]]\nkind = \"dipole\"\nposition = [" << x << ", 0.0, " << z
           << "]\ndirection = [0.0, 0.0, 1.0]\nmoment = " << moment << "\n";
-    return s.str();
-}
-
-std::string uniformField(double H)
-{
-    std::ostringstream s;
-    s << "[[magnets]]\nkind = \"uniform\"\ndirection = [0.0, 0.0, 1.0]\nfield = " << H << "\n";
     return s.str();
 }
 
@@ -64,15 +59,6 @@ SpikeResult poolFrame(const SpikeScene& sc, const ferro::test::TempDir& dir, dou
     setComment(pool, "time", std::to_string(t));
     writeMesh(dir.file("pool.ply"), pool);
     return spikeFrame(sc, dir.file("pool.ply"), "", dir.file("spiky.ply"));
-}
-
-SpikeInput frameInput(const SpikeScene& sc, const TriangleMesh& mesh, double time = 0.0)
-{
-    SpikeInput in;
-    in.surface = mesh;
-    in.fluid = sc.fluid;
-    for (const MagnetTrack& t : sc.magnets) in.magnets.push_back(t.at(time));
-    return in;
 }
 
 // The spike's axis measured on the output mesh: from the area-weighted centroid of its flank
