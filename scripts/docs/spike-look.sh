@@ -7,7 +7,8 @@
 #
 # The frame is simulated once (WORK_DIR/base); each variant is a copy of that shot run again
 # with its --set, so only the spikes, the export and the render are made again (shot.sh's
-# stamps). The PNGs go to docs/media/look/spikes_NAME.png.
+# stamps). The PNGs go to docs/media/look/spikes_NAME.png. SPIKE_LOOK_ONLY="NAME ..." makes
+# only those variants (the base frame is made too, if WORK_DIR lacks it).
 # Exit codes: 2 bad arguments, 3 a stage failed.
 set -euo pipefail
 root="$(cd "$(dirname "$0")/../.." && pwd)"
@@ -23,9 +24,12 @@ common=(--set fluid.block.0.count=10240 --set render.width=480 --set render.heig
 run() { "$root/scripts/shot.sh" "$root/examples/magnet_slide.toml" "$1" "${common[@]}" "${@:2}" 2> "$1.log" ||
           { tail -3 "$1.log" >&2; exit 3; }; }
 
-echo "spike-look.sh: the base frame (pre-roll and frame 1)" >&2
-run "$work/base"
-cp "$work/base/png/frame_0001.png" "$media/spikes_default.png"
+only="${SPIKE_LOOK_ONLY:-}"
+if [[ -z "$only" || ! -f "$work/base/png/frame_0001.png" ]]; then
+  echo "spike-look.sh: the base frame (pre-roll and frame 1)" >&2
+  run "$work/base"
+fi
+[[ -n "$only" ]] || cp "$work/base/png/frame_0001.png" "$media/spikes_default.png"
 
 # name, then the --set values of the variant.
 variants=(
@@ -39,9 +43,12 @@ variants=(
   "defects_0.35 spikes.defects=0.35"
   "square spikes.pattern=square"
   "square_sharp spikes.pattern=square spikes.sharpness=3.0"
+  "spacing_physical spikes.spacing=physical"
+  "spacing_growth spikes.spacing=growth"
 )
 for v in "${variants[@]}"; do
   read -r name rest <<< "$v"
+  [[ -z "$only" || " $only " == *" $name "* ]] || continue
   sets=()
   for kv in $rest; do sets+=(--set "$kv"); done
   rm -rf "$work/$name"

@@ -1,0 +1,170 @@
+#!/usr/bin/env python3
+"""A flat layer's pattern as it is born after the field jumps above critical, against linear
+theory's fastest-growing mode (scripts/bench/field-sweep.sh, the jumps; issue 32).
+
+    scripts/bench/field_jump.py PROFILE.txt --jump T --ratio R --spacing S
+                                [--rho 1200 --sigma 0.025 --nu 5e-6 --chi 1.5 --ms 35000]
+
+PROFILE.txt: scripts/bench/spike_profile.py's rows for single frames, labelled by their time
+(t0.3125, ...). The exponential phase is the frames after the jump at time T whose
+peak-to-trough height lies between 0.3 mm (above a settled layer's 0.1-0.2) and 2 mm (before
+the spikes turn nonlinear): its growth rate is the least-squares slope of ln(ptp) against t,
+its wavelength the median of the frames' fundamental wavelengths. The last five frames give the
+wavelength the pattern coarsens to.
+
+The theory (the same as spikes/SpikePhysics.cpp, written again here as a cross-check): the
+applied field R x the critical one gives M inside a flat layer (M = L(H0 - M), the fluid's
+Langevin law), M_c from eq. 16; the growth rate s(k) of a deep layer of kinematic viscosity nu,
+    (s + 2 nu k^2)^2 + w0^2 = 4 nu^2 k^3 sqrt(k^2 + s / nu),
+    rho w0^2 = rho g k + sigma k^3 - 2 sqrt(g rho sigma) (M / M_c)^2 k^2,
+and its fastest-growing wavenumber. Printed for the scene's nu, and for the viscosity nu_fit
+at which the theory's fastest rate equals the simulated one (SPH's numerical viscosity is not
+the scene's): does that one number also give the simulated wavelength?
+One CSV row: spacing_mm, ratio, M/M_c, frames, rate_sim, lambda_sim_mm, lambda_late_mm,
+rate_theory, lambda_theory_mm, nu_fit, lambda_fit_mm.
+"""
+import argparse
+import math
+import sys
+
+MU0 = 4e-7 * math.pi
+
+
+def langevin_m(h, chi, ms):
+    xi = 3 * chi * h / ms
+    if abs(xi) < 1e-4:
+        return chi * h
+    return ms * (1 / math.tanh(xi) - 1 / xi)
+
+
+def langevin_slope(h, chi, ms):
+    xi = 3 * chi * h / ms
+    if abs(xi) < 1e-4:
+        return chi
+    return 3 * chi * (1 / xi ** 2 - 1 / math.sinh(xi) ** 2)
+
+
+def critical(rho, g, sigma, chi, ms):
+    """(M_c, applied H_c) of eq. 16 with r0 at M_c."""
+    cap = math.sqrt(g * rho * sigma)
+    r0 = 1 + chi
+    for _ in range(100):
+        mc = math.sqrt(2 / MU0 * (1 + 1 / r0) * cap)
+        lo, hi = 0.0, mc / chi
+        while langevin_m(hi, chi, ms) < mc:
+            hi *= 2
+        for _ in range(100):
+            mid = 0.5 * (lo + hi)
+            lo, hi = (mid, hi) if langevin_m(mid, chi, ms) < mc else (lo, mid)
+        h = 0.5 * (lo + hi)
+        r = math.sqrt((1 + mc / h) * (1 + langevin_slope(h, chi, ms)))
+        if abs(r - r0) < 1e-12 * r:
+            break
+        r0 = r
+    return mc, h + mc
+
+
+def layer_m(h0, chi, ms):
+    lo, hi = 0.0, h0
+    for _ in range(200):
+        m = 0.5 * (lo + hi)
+        lo, hi = (m, hi) if langevin_m(h0 - m, chi, ms) > m else (lo, m)
+    return 0.5 * (lo + hi)
+
+
+def rate(k, q, rho, g, sigma, nu):
+    w02 = (rho * g * k + sigma * k ** 3 - 2 * math.sqrt(g * rho * sigma) * q * k * k) / rho
+    if w02 >= 0:
+        return 0.0
+    s_inv = math.sqrt(-w02)
+    if nu <= 0:
+        return s_inv
+    lo, hi = 0.0, s_inv
+    for _ in range(200):
+        s = 0.5 * (lo + hi)
+        f = (s + 2 * nu * k * k) ** 2 + w02 - 4 * nu * nu * k ** 3 * math.sqrt(k * k + s / nu)
+        lo, hi = (s, hi) if f < 0 else (lo, s)
+    return 0.5 * (lo + hi)
+
+
+def fastest(q, rho, g, sigma, nu):
+    """(k, s) of the fastest-growing mode."""
+    kc = math.sqrt(rho * g / sigma)
+    if q <= 1:
+        return kc, 0.0
+    root = math.sqrt(q * q - 1)
+    a, b = kc * (q - root), kc * (q + root)
+    for _ in range(200):
+        c, d = a + (b - a) / 3, b - (b - a) / 3
+        if rate(c, q, rho, g, sigma, nu) < rate(d, q, rho, g, sigma, nu):
+            a = c
+        else:
+            b = d
+    k = 0.5 * (a + b)
+    return k, rate(k, q, rho, g, sigma, nu)
+
+
+def main():
+    ap = argparse.ArgumentParser()
+    ap.add_argument("profile")
+    ap.add_argument("--jump", type=float, required=True)
+    ap.add_argument("--ratio", type=float, required=True)
+    ap.add_argument("--spacing", type=float, required=True)
+    ap.add_argument("--rho", type=float, default=1200.0)
+    ap.add_argument("--sigma", type=float, default=0.025)
+    ap.add_argument("--g", type=float, default=9.81)
+    ap.add_argument("--nu", type=float, default=5e-6)
+    ap.add_argument("--chi", type=float, default=1.5)
+    ap.add_argument("--ms", type=float, default=35000.0)
+    a = ap.parse_args()
+    rows = []
+    with open(a.profile) as f:
+        for line in f:
+            p = line.split()
+            if len(p) >= 4 and p[0].startswith("t"):
+                try:
+                    rows.append((float(p[0][1:]), float(p[2]), float(p[3])))
+                except ValueError:
+                    continue
+    rows.sort()
+    # The first contiguous run of the window (a pattern that sinks back through it later
+    # is not growing).
+    first = []
+    for r in rows:
+        if r[0] <= a.jump:
+            continue
+        if 0.3 <= r[1] <= 2.0:
+            first.append(r)
+        elif first:
+            break
+    grow = first
+    if len(grow) < 3:
+        sys.exit("field_jump.py: %s: fewer than 3 frames between 0.3 and 2 mm" % a.profile)
+    n = len(grow)
+    tm = sum(r[0] for r in grow) / n
+    ym = sum(math.log(r[1]) for r in grow) / n
+    s_sim = sum((r[0] - tm) * (math.log(r[1]) - ym) for r in grow) / sum((r[0] - tm) ** 2 for r in grow)
+    lams = sorted(r[2] for r in grow)
+    lam_sim = lams[n // 2]
+    late = sorted(r[2] for r in rows[-5:])
+    lam_late = late[len(late) // 2]
+    mc, hc = critical(a.rho, a.g, a.sigma, a.chi, a.ms)
+    q = (layer_m(a.ratio * hc, a.chi, a.ms) / mc) ** 2
+    k_th, s_th = fastest(q, a.rho, a.g, a.sigma, a.nu)
+    # nu_fit: the theory's fastest rate falls monotonically with nu; bisect in log nu.
+    lo, hi = math.log(1e-9), math.log(10.0)
+    if fastest(q, a.rho, a.g, a.sigma, 1e-9)[1] < s_sim:
+        nu_fit = float("nan")
+    else:
+        for _ in range(60):
+            mid = 0.5 * (lo + hi)
+            lo, hi = (mid, hi) if fastest(q, a.rho, a.g, a.sigma, math.exp(mid))[1] > s_sim else (lo, mid)
+        nu_fit = math.exp(0.5 * (lo + hi))
+    k_fit = fastest(q, a.rho, a.g, a.sigma, nu_fit)[0] if nu_fit == nu_fit else float("nan")
+    print("%g,%g,%.3f,%d,%.1f,%.2f,%.2f,%.1f,%.2f,%.2g,%.2f" % (
+        a.spacing * 1e3, a.ratio, math.sqrt(q), n, s_sim, lam_sim, lam_late, s_th, 2e3 * math.pi / k_th,
+        nu_fit, 2e3 * math.pi / k_fit if k_fit == k_fit else float("nan")))
+
+
+if __name__ == "__main__":
+    main()
