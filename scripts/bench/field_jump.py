@@ -80,9 +80,10 @@ def rate(k, q, rho, g, sigma, nu):
     if nu <= 0:
         return s_inv
     lo, hi = 0.0, s_inv
-    for _ in range(200):
+    for _ in range(400):
         s = 0.5 * (lo + hi)
-        f = (s + 2 * nu * k * k) ** 2 + w02 - 4 * nu * nu * k ** 3 * math.sqrt(k * k + s / nu)
+        r = math.sqrt(k * k + s / nu)
+        f = s * s + 4 * nu * k * k * s * r / (k + r) + w02   # (s + 2 nu k^2)^2 + w0^2 - 4 nu^2 k^3 r
         lo, hi = (s, hi) if f < 0 else (lo, s)
     return 0.5 * (lo + hi)
 

@@ -69,6 +69,30 @@ TEST_CASE("fastest growth of a very viscous layer: k_c at every field, the Stoke
     }
 }
 
+TEST_CASE("fastest growth at the example fluid's viscosity, against an independent computation",
+          "[spikes][physics][wavenumber]")
+{
+    // References from scripts/bench/field_jump.py, a separate Python implementation of the same
+    // dispersion relation (its own root bracketing and a ternary search for the maximum), for
+    // examples/annotated.toml's fluid (1200 kg/m^3, 0.025 N/m, nu = 5e-6 m^2/s).
+    const struct {
+        double ratio, kOverKc, rate;
+    } refs[] = {{1.1, 1.323111, 57.192}, {1.2, 1.652530, 97.161}, {1.5, 2.717503, 239.019}};
+    for (const auto& r : refs) {
+        const SurfaceModes m = labFluid(r.ratio * r.ratio, 5e-6);
+        const double k = fastestGrowingWavenumber(m);
+        INFO("M/M_c = " << r.ratio);
+        REQUIRE(k / criticalWavenumber(m) == Approx(r.kOverKc).epsilon(1e-5));
+        REQUIRE(growthRate(m, k) == Approx(r.rate).epsilon(1e-4));
+    }
+    // Far past the Stokes regime the root stays accurate (the form without cancellation).
+    for (double nu : {1e2, 1e3, 1e4}) {
+        const SurfaceModes m = labFluid(4.0, nu);
+        REQUIRE(fastestGrowingWavenumber(m) == Approx(criticalWavenumber(m)).epsilon(1e-4));
+        REQUIRE(growthRate(m, criticalWavenumber(m)) > 0);
+    }
+}
+
 TEST_CASE("fastest growth between the limits: slower and longer with viscosity, shorter with the field",
           "[spikes][physics][wavenumber]")
 {
@@ -115,6 +139,7 @@ TEST_CASE("spacing = \"growth\": a flat pool's tips stand at the fastest-growing
         const SpikeScene sc = parseSpikeScene(SceneDocument::parse(
             dishScene(R, uniformField(H0) + "[spikes]\nspacing = \"growth\"\nmin_spacing = 0.001\n"), "test.toml"));
         REQUIRE(sc.params.spacing == SpikeParams::Spacing::Growth);
+        REQUIRE(sc.fluid.viscosity == 5e-6);   // the scene's fluid.viscosity reaches the spikes
         const SpikeResult res = addSpikes(frameInput(sc, makeFlatPool(R, kDepth, 20)), sc.params);
         REQUIRE(res.patterns.size() == 1);
         const SpikePattern& pat = res.patterns[0];
