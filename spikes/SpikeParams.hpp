@@ -56,9 +56,9 @@ struct SpikeParams {
     double maxAspect = 1.0;          ///< cap of tip height (3 C0) over tip spacing l, > 0
     double sharpness = 1.0;          ///< profile exponent p >= 1: 1 = eq. 13 exactly; larger p narrows
                                      ///< the spikes into cones over flat troughs (same tips, same spacing).
-                                     ///< 1 is the shape measured up to 1.4 x the critical field (within
-                                     ///< 10 % of eq. 13, Gollwitzer et al. 2007); p <= 1.4 stays within
-                                     ///< 10 % of it (bench field-sweep, spike_profile.py --procedural)
+                                     ///< 1 is the shape measured near onset (within 10 % of eq. 13 up to
+                                     ///< 1.18-1.4 x the critical field, Gollwitzer et al. 2007); p <= 1.4
+                                     ///< stays within 10 % of it (bench field-sweep, spike_profile.py)
     // The art director's keys (keyframable with [[spikes.keys]]). They change the look, not
     // where the physics puts the pattern: the defaults leave the paper's spikes untouched.
     double heightGain = 1.0;         ///< factor on every tip's height (after the aspect cap), >= 0,

@@ -42,7 +42,7 @@ simulate() { bench_cached_shot field-sweep "$@"; }
 
 echo "spacing_mm,particles,sim_cpu_s,plateau,direction,field_A_m,field_over_critical,frames,rms_h_spacings,peaks,nn_median_mm,height_mm,stands" \
   > "$out/field_sweep.csv"
-echo "spacing_mm,direction,field_over_critical,frames,ptp_mm,lambda_mm,dev_max,dev_rms,harmonic,move" > "$out/field_profile.csv"
+echo "spacing_mm,direction,field_over_critical,frames,ptp_mm,lambda_mm,dev_max,dev_rms,below,above,move" > "$out/field_profile.csv"
 echo "spacing_mm,label,distance_mm,surface_mm,fundamental_mm" > "$out/field_profile_cut.csv"
 summary=()
 for s in $spacings; do
@@ -57,13 +57,15 @@ for s in $spacings; do
   # The standing plateaus' spike shape against the fundamental Fourier mode (Gollwitzer et al.
   # 2007: within 10 % up to 40 % above onset), each frame of the plateau's second half.
   windows=()
+  python3 "$root/scripts/bench/field_sweep.py" "$scene" --windows "$critical" > "$work/windows.txt"
+  # Joined on the plateau index (plateaus.csv leaves out a plateau without frames).
   while IFS= read -r w; do windows+=(--window "$w"); done < <(
-    paste -d' ' <(python3 "$root/scripts/bench/field_sweep.py" "$scene" --windows "$critical") \
-                 <(tail -n +2 "$work/plateaus.csv" | cut -d, -f10) | awk '$2 == 1 { print $1 }')
+    awk -F, 'NR == FNR { if (FNR > 1 && $10 == 1) standing[$1] = 1; next } ($1 in standing) { print $2 }' \
+      "$work/plateaus.csv" FS=' ' "$work/windows.txt")
   if (( ${#windows[@]} )); then
     python3 "$root/scripts/bench/spike_profile.py" "$dir" --period 0.024,0.024 "${windows[@]}" \
       --profile-csv "$work/cut.csv" > "$work/profile.txt"
-    awk -v s="$s" 'NR > 1 { split($1, l, "_"); printf "%g,%s,%s,%s,%s,%s,%s,%s,%s,%s\n", s * 1e3, l[1], l[2], $2, $3, $4, $5, $6, $7, $8 }' \
+    awk -v s="$s" 'NR > 1 { split($1, l, "_"); printf "%g,%s,%s,%s,%s,%s,%s,%s,%s,%s,%s\n", s * 1e3, l[1], l[2], $2, $3, $4, $5, $6, $7, $8, $10 }' \
       "$work/profile.txt" >> "$out/field_profile.csv"
     tail -n +2 "$work/cut.csv" | awk -v s="$s" '{ printf "%g,%s\n", s * 1e3, $0 }' >> "$out/field_profile_cut.csv"
   fi
@@ -110,7 +112,7 @@ done
 # hold scene, every key after the settling at that field), frames at 240 per second to 0.45 s:
 # the pattern's growth rate and wavelength as it is born, against linear theory's
 # fastest-growing mode (scripts/bench/field_jump.py).
-echo "spacing_mm,field_over_critical,m_over_mc,frames,rate_sim_per_s,lambda_sim_mm,lambda_late_mm,rate_theory_per_s,lambda_theory_mm,nu_fit_m2_s,lambda_fit_mm,sim_cpu_s" \
+echo "spacing_mm,field_over_critical,m_over_mc,frames,rate_sim_per_s,lambda_sim_mm,lambda_late_mm,rate_nu_per_s,lambda_nu_mm,nu_eff_m2_s,rate_eff_per_s,lambda_eff_mm,nu_fit_m2_s,lambda_fit_mm,sim_cpu_s" \
   > "$out/field_jump.csv"
 for c in $jumps; do
   IFS=: read -r s r <<< "$c"
@@ -122,7 +124,7 @@ for c in $jumps; do
     windows+=(--window "$(awk -v i="$i" 'BEGIN { printf "t%.5f:%.5f:%.5f", i / 240, i / 240 - 0.001, i / 240 + 0.001 }')")
   done
   python3 "$root/scripts/bench/spike_profile.py" "$dir" --period 0.024,0.024 "${windows[@]}" > "$work/jump.txt"
-  row="$(python3 "$root/scripts/bench/field_jump.py" "$work/jump.txt" --jump 0.301 --ratio "$r" --spacing "$s")" ||
+  row="$(python3 "$root/scripts/bench/field_jump.py" "$work/jump.txt" --scene "$hold_scene" --jump 0.301 --ratio "$r" --spacing "$s")" ||
     { bench_note "jump $c: no growth to measure"; continue; }
   echo "$row,$(printf '%.0f' "$cpu")" >> "$out/field_jump.csv"
 done
@@ -201,42 +203,48 @@ fi
   echo
   echo "Gollwitzer et al. (J. Fluid Mech. 2007, arXiv nlin/0604009) measured that the fundamental"
   echo "Fourier mode (the sum of three cosines of the paper's eq. 13) approximates a spike's shape to"
-  echo "within 10 % up to 40 % above onset. \`scripts/bench/spike_profile.py\` measures the same on the"
-  echo "standing plateaus above: the surface (the colour field's 0.5 level on a half-spacing grid), its"
-  echo "fundamental (the band of box modes within 0.75-1.3 of the wavenumber that holds the most"
-  echo "power), and per frame: ptp, the surface's peak-to-trough height; lambda, the band's"
-  echo "wavelength (lambda_c = 9.16 mm); dev_max, the largest deviation from the fundamental over ptp"
-  echo "(the lab's \"within 10 %\"); dev_rms; harmonic, the share of the pattern's variance outside the"
-  echo "fundamental; move, the RMS change between frames over ptp (a still surface reads about 0.01)."
-  echo "Means over the plateau's second half."
+  echo "within 10 % up to 40 % of the bifurcation parameter (1.18-1.4 x the critical induction, as that"
+  echo "parameter is defined on B^2 or B). \`scripts/bench/spike_profile.py\` measures the standing plateaus"
+  echo "above: the surface (the colour field's 0.5 level on a half-spacing grid), its fundamental (the"
+  echo "band of box modes within 0.75-1.3 of the wavenumber, of at least two wavelengths across the"
+  echo "box, that holds the most power), and per frame: ptp, the surface's peak-to-trough height;"
+  echo "lambda, the band's wavelength (lambda_c = 9.16 mm); dev_max, the largest deviation from the"
+  echo "fundamental over ptp (the lab's \"within 10 %\"; it also counts a few peaks of unequal height,"
+  echo "so it cannot tell shape from disorder); dev_rms; below, the share of the variance in longer"
+  echo "modes than the band (peaks of unequal height in a small box); above, the share in shorter"
+  echo "modes (the harmonics that sharpen tips and flatten troughs: the shape); move, the RMS change"
+  echo "between frames over ptp. Means over the plateau's second half."
   echo
-  echo "| spacing mm | direction | field / critical | frames | ptp mm | lambda mm | dev_max | dev_rms | harmonic | move |"
-  echo "| ---: | --- | ---: | ---: | ---: | ---: | ---: | ---: | ---: | ---: |"
-  awk -F, 'NR > 1 { printf "| %s | %s | %s | %s | %s | %s | %s | %s | %s | %s |\n", $1, $2, $3, $4, $5, $6, $7, $8, $9, $10 }' \
+  echo "| spacing mm | direction | field / critical | frames | ptp mm | lambda mm | dev_max | dev_rms | below | above | move |"
+  echo "| ---: | --- | ---: | ---: | ---: | ---: | ---: | ---: | ---: | ---: | ---: |"
+  awk -F, 'NR > 1 { printf "| %s | %s | %s | %s | %s | %s | %s | %s | %s | %s | %s |\n", $1, $2, $3, $4, $5, $6, $7, $8, $9, $10, $11 }' \
     "$out/field_profile.csv"
   echo
   [[ -f "$out/field_profile.png" ]] && printf '%s\n\n' "![one spike's profile](field_profile.png)"
   echo "Ferro's procedural profile (spikes/SpikePhysics.hpp, hexProfile sharpened with exponent p, the"
-  echo "\`sharpness\` key) by the same measures, on one periodic cell of its lattice:"
+  echo "\`sharpness\` key) by the same measures, on one periodic cell of its lattice (no longer modes:"
+  echo "every deviation is above the band):"
   echo
-  echo "| sharpness p | dev_max | dev_rms | harmonic |"
+  echo "| sharpness p | dev_max | dev_rms | above |"
   echo "| ---: | ---: | ---: | ---: |"
   awk 'NR > 1 { printf "| %s | %s | %s | %s |\n", $1, $2, $3, $4 }' "$work/procedural.txt"
   echo
   echo "### The pattern as it is born: field jumps against the fastest-growing mode"
   echo
   echo "The flat layer's field switched from 0 to a field above critical at 0.301 s (the hold scene,"
-  echo "frames at 240 per second). While the pattern grows from 0.3 to 2 mm peak to trough: its"
-  echo "growth rate (the slope of ln ptp) and the median wavelength of its fundamental; then the"
-  echo "wavelength over the last five frames (0.43-0.45 s), after it has coarsened. Theory:"
-  echo "linear stability's fastest-growing mode of a deep layer at the scene's viscosity (5e-6"
-  echo "m^2/s) and at nu_fit, the viscosity whose fastest rate is the simulated one (SPH's numerical"
-  echo "viscosity is not the scene's). The 24 mm box holds wavelengths 24 / sqrt(m^2 + n^2) mm only:"
-  echo "7.59, 6.66, 6.0, 5.82, 5.66, 5.37 near these."
+  echo "frames at 240 per second). The exponential phase: the first run of frames from 0.3 to 2 mm peak"
+  echo "to trough, ended where the fundamental's wavelength jumps by over 10 % between frames; its"
+  echo "growth rate (the slope of ln of the fundamental band's RMS amplitude) and the median"
+  echo "wavelength of its fundamental; then the wavelength over the last five frames (0.43-0.45 s),"
+  echo "after it has coarsened. Theory: linear stability's fastest-growing mode of a deep layer, at the"
+  echo "scene's viscosity (5e-6 m^2/s); at nu_eff, the viscosity the simulator's step uses (the"
+  echo "scene's plus 0.02 x 2 spacings x sqrt(2 g depth)), a prediction; and at nu_fit, the viscosity"
+  echo "whose fastest rate is the simulated one. The 24 mm box holds wavelengths 24 / sqrt(m^2 + n^2) mm"
+  echo "only: 8.49, 7.59, 6.66, 6.0, 5.82, 5.66, 5.37 near these."
   echo
-  echo "| spacing mm | field / critical | M / M_c | frames | rate 1/s | lambda mm | lambda late mm | theory rate 1/s | theory lambda mm | nu_fit m^2/s | lambda at nu_fit mm | sim CPU s |"
-  echo "| ---: | ---: | ---: | ---: | ---: | ---: | ---: | ---: | ---: | ---: | ---: | ---: |"
-  awk -F, 'NR > 1 { printf "| %s | %s | %s | %s | %s | %s | %s | %s | %s | %s | %s | %s |\n", $1, $2, $3, $4, $5, $6, $7, $8, $9, $10, $11, $12 }' \
+  echo "| spacing mm | field / critical | M / M_c | frames | rate 1/s | lambda mm | lambda late mm | rate at nu 1/s | lambda at nu mm | nu_eff m^2/s | rate at nu_eff 1/s | lambda at nu_eff mm | nu_fit m^2/s | lambda at nu_fit mm | sim CPU s |"
+  echo "| ---: | ---: | ---: | ---: | ---: | ---: | ---: | ---: | ---: | ---: | ---: | ---: | ---: | ---: | ---: |"
+  awk -F, 'NR > 1 { printf "| %s | %s | %s | %s | %s | %s | %s | %s | %s | %s | %s | %s | %s | %s | %s |\n", $1, $2, $3, $4, $5, $6, $7, $8, $9, $10, $11, $12, $13, $14, $15 }' \
     "$out/field_jump.csv"
 } > "$out/field-sweep.md"
 bench_note "wrote $out/field_sweep.csv and $out/field-sweep.md"

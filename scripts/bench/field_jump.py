@@ -2,26 +2,29 @@
 """A flat layer's pattern as it is born after the field jumps above critical, against linear
 theory's fastest-growing mode (scripts/bench/field-sweep.sh, the jumps; issue 32).
 
-    scripts/bench/field_jump.py PROFILE.txt --jump T --ratio R --spacing S
-                                [--rho 1200 --sigma 0.025 --nu 5e-6 --chi 1.5 --ms 35000]
+    scripts/bench/field_jump.py PROFILE.txt --scene SCENE.toml --jump T --ratio R --spacing S
 
 PROFILE.txt: scripts/bench/spike_profile.py's rows for single frames, labelled by their time
-(t0.3125, ...). The exponential phase is the frames after the jump at time T whose
-peak-to-trough height lies between 0.3 mm (above a settled layer's 0.1-0.2) and 2 mm (before
-the spikes turn nonlinear): its growth rate is the least-squares slope of ln(ptp) against t,
-its wavelength the median of the frames' fundamental wavelengths. The last five frames give the
-wavelength the pattern coarsens to.
+(t0.3125, ...). The exponential phase: the first run of at least 3 consecutive frames after
+the jump at time T whose peak-to-trough height lies between 0.3 mm (above a settled layer's
+0.1-0.2) and 2 mm (before the spikes turn nonlinear), a frame outside restarting the run, ended
+where the fundamental's wavelength jumps by more than 10 % between frames (the pattern
+re-arranging). Its growth rate is the least-squares slope of ln(the fundamental band's RMS
+amplitude) against t, its wavelength the median of the frames' fundamental wavelengths. The
+last five frames give the wavelength the pattern coarsens to.
 
 The theory (the same as spikes/SpikePhysics.cpp, written again here as a cross-check): the
 applied field R x the critical one gives M inside a flat layer (M = L(H0 - M), the fluid's
 Langevin law), M_c from eq. 16; the growth rate s(k) of a deep layer of kinematic viscosity nu,
     (s + 2 nu k^2)^2 + w0^2 = 4 nu^2 k^3 sqrt(k^2 + s / nu),
     rho w0^2 = rho g k + sigma k^3 - 2 sqrt(g rho sigma) (M / M_c)^2 k^2,
-and its fastest-growing wavenumber. Printed for the scene's nu, and for the viscosity nu_fit
-at which the theory's fastest rate equals the simulated one (SPH's numerical viscosity is not
-the scene's): does that one number also give the simulated wavelength?
+and its fastest-growing wavenumber, for three viscosities: the scene's nu; nu_eff, the one the
+simulator's step uses (the scene's plus sim.artificial_viscosity x 2 spacings x sqrt(2 g
+depth), sim/sph/FluidSimulation.cpp), a prediction; and nu_fit, the one whose fastest rate
+equals the simulated rate (SPH has numerical viscosity beyond nu_eff). The fluid comes from
+SCENE.toml.
 One CSV row: spacing_mm, ratio, M/M_c, frames, rate_sim, lambda_sim_mm, lambda_late_mm,
-rate_theory, lambda_theory_mm, nu_fit, lambda_fit_mm.
+rate_nu, lambda_nu_mm, nu_eff, rate_eff, lambda_eff_mm, nu_fit, lambda_fit_mm.
 """
 import argparse
 import math
@@ -105,66 +108,85 @@ def fastest(q, rho, g, sigma, nu):
     return k, rate(k, q, rho, g, sigma, nu)
 
 
+def scene_fluid(path):
+    """(rho, sigma, nu, chi, Ms, layer depth, artificial viscosity alpha) of the scene."""
+    import tomllib
+    with open(path, "rb") as f:
+        sc = tomllib.load(f)
+    fl, mg = sc.get("fluid", {}), sc.get("magnetization", {})
+    block = fl.get("block", [{}])[0]
+    depth = block.get("max", [0, 0, 0.005])[2] - block.get("min", [0, 0, 0])[2]
+    return (fl.get("rest_density", 1000.0), fl.get("surface_tension", 0.0), fl.get("viscosity", 1e-6),
+            mg.get("susceptibility", 0.0), mg.get("saturation", 0.0), depth,
+            sc.get("sim", {}).get("artificial_viscosity", 0.02))
+
+
 def main():
     ap = argparse.ArgumentParser()
     ap.add_argument("profile")
+    ap.add_argument("--scene", required=True, help="the jump's scene (its fluid, layer and sim.artificial_viscosity)")
     ap.add_argument("--jump", type=float, required=True)
     ap.add_argument("--ratio", type=float, required=True)
     ap.add_argument("--spacing", type=float, required=True)
-    ap.add_argument("--rho", type=float, default=1200.0)
-    ap.add_argument("--sigma", type=float, default=0.025)
     ap.add_argument("--g", type=float, default=9.81)
-    ap.add_argument("--nu", type=float, default=5e-6)
-    ap.add_argument("--chi", type=float, default=1.5)
-    ap.add_argument("--ms", type=float, default=35000.0)
     a = ap.parse_args()
-    rows = []
+    rho, sigma, nu, chi, ms, depth, alpha = scene_fluid(a.scene)
+    if not (rho > 0 and sigma > 0 and chi > 0 and ms > 0):
+        sys.exit("field_jump.py: %s: needs rest_density, surface_tension, susceptibility and saturation" % a.scene)
+    rows = []   # (t, ptp, lambda, band amplitude), mm
     with open(a.profile) as f:
         for line in f:
             p = line.split()
-            if len(p) >= 4 and p[0].startswith("t"):
+            if len(p) >= 9 and p[0].startswith("t"):
                 try:
-                    rows.append((float(p[0][1:]), float(p[2]), float(p[3])))
+                    rows.append((float(p[0][1:]), float(p[2]), float(p[3]), float(p[8])))
                 except ValueError:
                     continue
     rows.sort()
-    # The first contiguous run of the window (a pattern that sinks back through it later
-    # is not growing).
-    first = []
+    # The exponential phase: the first run of at least 3 consecutive frames after the jump with
+    # ptp in [0.3, 2] mm (a noisy frame outside restarts the run), ended where the wavelength
+    # jumps by more than 10 % from one frame to the next (the pattern re-arranging).
+    grow = []
     for r in rows:
         if r[0] <= a.jump:
             continue
-        if 0.3 <= r[1] <= 2.0:
-            first.append(r)
-        elif first:
+        inside = 0.3 <= r[1] <= 2.0
+        jumped = bool(grow) and abs(r[2] - grow[-1][2]) > 0.1 * grow[-1][2]
+        if inside and not jumped:
+            grow.append(r)
+        elif len(grow) >= 3:
             break
-    grow = first
+        else:
+            grow = [r] if inside else []
     if len(grow) < 3:
-        sys.exit("field_jump.py: %s: fewer than 3 frames between 0.3 and 2 mm" % a.profile)
+        sys.exit("field_jump.py: %s: fewer than 3 consecutive frames between 0.3 and 2 mm" % a.profile)
     n = len(grow)
     tm = sum(r[0] for r in grow) / n
-    ym = sum(math.log(r[1]) for r in grow) / n
-    s_sim = sum((r[0] - tm) * (math.log(r[1]) - ym) for r in grow) / sum((r[0] - tm) ** 2 for r in grow)
+    ym = sum(math.log(r[3]) for r in grow) / n
+    s_sim = sum((r[0] - tm) * (math.log(r[3]) - ym) for r in grow) / sum((r[0] - tm) ** 2 for r in grow)
     lams = sorted(r[2] for r in grow)
     lam_sim = lams[n // 2]
     late = sorted(r[2] for r in rows[-5:])
     lam_late = late[len(late) // 2]
-    mc, hc = critical(a.rho, a.g, a.sigma, a.chi, a.ms)
-    q = (layer_m(a.ratio * hc, a.chi, a.ms) / mc) ** 2
-    k_th, s_th = fastest(q, a.rho, a.g, a.sigma, a.nu)
+    mc, hc = critical(rho, a.g, sigma, chi, ms)
+    q = (layer_m(a.ratio * hc, chi, ms) / mc) ** 2
+    k_th, s_th = fastest(q, rho, a.g, sigma, nu)
+    # The step's viscosity (sim/sph/FluidSimulation.cpp): the scene's plus alpha h U, h = 2
+    # spacings, U = sqrt(2 g depth) for a layer starting at rest.
+    nu_eff = nu + alpha * 2 * a.spacing * math.sqrt(2 * a.g * depth)
+    k_eff, s_eff = fastest(q, rho, a.g, sigma, nu_eff)
     # nu_fit: the theory's fastest rate falls monotonically with nu; bisect in log nu.
-    lo, hi = math.log(1e-9), math.log(10.0)
-    if fastest(q, a.rho, a.g, a.sigma, 1e-9)[1] < s_sim:
-        nu_fit = float("nan")
-    else:
+    nu_fit = float("nan")
+    if 0 < s_sim < fastest(q, rho, a.g, sigma, 1e-9)[1]:
+        lo, hi = math.log(1e-9), math.log(10.0)
         for _ in range(60):
             mid = 0.5 * (lo + hi)
-            lo, hi = (mid, hi) if fastest(q, a.rho, a.g, a.sigma, math.exp(mid))[1] > s_sim else (lo, mid)
+            lo, hi = (mid, hi) if fastest(q, rho, a.g, sigma, math.exp(mid))[1] > s_sim else (lo, mid)
         nu_fit = math.exp(0.5 * (lo + hi))
-    k_fit = fastest(q, a.rho, a.g, a.sigma, nu_fit)[0] if nu_fit == nu_fit else float("nan")
-    print("%g,%g,%.3f,%d,%.1f,%.2f,%.2f,%.1f,%.2f,%.2g,%.2f" % (
+    lam_fit = 2e3 * math.pi / fastest(q, rho, a.g, sigma, nu_fit)[0] if nu_fit == nu_fit else float("nan")
+    print("%g,%g,%.3f,%d,%.1f,%.2f,%.2f,%.1f,%.2f,%.2g,%.1f,%.2f,%.2g,%.2f" % (
         a.spacing * 1e3, a.ratio, math.sqrt(q), n, s_sim, lam_sim, lam_late, s_th, 2e3 * math.pi / k_th,
-        nu_fit, 2e3 * math.pi / k_fit if k_fit == k_fit else float("nan")))
+        nu_eff, s_eff, 2e3 * math.pi / k_eff, nu_fit, lam_fit))
 
 
 if __name__ == "__main__":

@@ -5,8 +5,8 @@ on the way up and down.
     scripts/bench/field_sweep.py SCENE.toml PATTERN.txt CRITICAL_A_M SPACING_M > plateaus.csv
     scripts/bench/field_sweep.py SCENE.toml --windows CRITICAL_A_M
 
---windows prints each plateau's second half as DIRECTION_FIELD/CRITICAL:T0:T1 (the windows
-of scripts/bench/spike_profile.py).
+--windows prints each plateau's index and its second half as DIRECTION_FIELD/CRITICAL:T0:T1
+(the windows of scripts/bench/spike_profile.py).
 
 SCENE.toml: the swept scene; its first magnet's keys come in pairs, (reached, left) at one
 field, after two keys at zero field (the settling). PATTERN.txt: scripts/bench/rosensweig.py
@@ -39,12 +39,19 @@ def plateaus(scene_path):
     return out
 
 
-def windows(scene, critical):
-    previous = None
-    for reached, left, field in plateaus(scene):
-        direction = "up" if previous is None or field > previous else "down"
+def directions(steps):
+    """"up" or "down" per plateau: against the plateau before it (the first one is up)."""
+    out, previous = [], None
+    for _, _, field in steps:
+        out.append("up" if previous is None or field > previous else "down")
         previous = field
-        print("%s_%.3g:%.4f:%.4f" % (direction, field / critical, 0.5 * (reached + left), left))
+    return out
+
+
+def windows(scene, critical):
+    steps = plateaus(scene)
+    for n, ((reached, left, field), direction) in enumerate(zip(steps, directions(steps))):
+        print("%d %s_%.3g:%.4f:%.4f" % (n, direction, field / critical, 0.5 * (reached + left), left))
 
 
 def main():
@@ -67,10 +74,7 @@ def main():
     steps = plateaus(scene)
     print("plateau,direction,field_A_m,field_over_critical,frames,rms_h_spacings,peaks,nn_median_mm,height_mm,stands")
     standing = []
-    previous = None
-    for n, (reached, left, field) in enumerate(steps):
-        direction = "up" if previous is None or field > previous else "down"
-        previous = field
+    for n, ((reached, left, field), direction) in enumerate(zip(steps, directions(steps))):
         half = 0.5 * (reached + left)
         sel = [r for r in rows if half - 1e-6 <= r[0] <= left + 1e-6]
         if not sel:

@@ -79,21 +79,21 @@ def surface_heights(pts, grid, s):
     bx, by = max(1, int(grid.lx / reach)), max(1, int(grid.ly / reach))
     wx, wy = grid.lx / bx, grid.ly / by
     for x, y, z in pts:
-        bins.setdefault((int(x / wx) % bx, int(y / wy) % by), []).append((x, y, z))
+        bins.setdefault((math.floor(x / wx) % bx, math.floor(y / wy) % by), []).append((x, y, z))
     out = [[0.0] * grid.ny for _ in range(grid.nx)]
     for i in range(grid.nx):
         for j in range(grid.ny):
             cx, cy = grid.centre(i, j)
             ci, cj = int(cx / wx), int(cy / wy)
             near = []   # (horizontal distance^2, z) of the particles within reach of the line
-            for a in (-1, 0, 1):
-                for b in (-1, 0, 1):
-                    for x, y, z in bins.get(((ci + a) % bx, (cj + b) % by), ()):
-                        dx = x - cx - grid.lx * round((x - cx) / grid.lx)
-                        dy = y - cy - grid.ly * round((y - cy) / grid.ly)
-                        d2 = dx * dx + dy * dy
-                        if d2 < reach * reach:
-                            near.append((d2, z))
+            # Each bin once (a box only one or two bins across would visit a bin twice).
+            for key in {((ci + a) % bx, (cj + b) % by) for a in (-1, 0, 1) for b in (-1, 0, 1)}:
+                for x, y, z in bins.get(key, ()):
+                    dx = x - cx - grid.lx * round((x - cx) / grid.lx)
+                    dy = y - cy - grid.ly * round((y - cy) / grid.ly)
+                    d2 = dx * dx + dy * dy
+                    if d2 < reach * reach:
+                        near.append((d2, z))
             if not near:
                 out[i][j] = float("nan")
                 continue
@@ -150,7 +150,10 @@ def fundamental(field, lx, ly):
     modes = [(math.hypot(signed(m, nx) / lx, signed(n, ny) / ly), abs(F[m][n]) ** 2, m, n)
              for m in range(nx) for n in range(ny) if m or n]
     best = None
-    for k0 in sorted(set(round(k, 6) for k, _, _, _ in modes)):
+    # Band centres: modes of at least two wavelengths across the box in x or y (the box-scale
+    # modes (1, 0), (1, 1) are the unequal heights of a few peaks, not a pattern's wavelength).
+    centres = set(round(k, 6) for k, _, m, n in modes if max(abs(signed(m, nx)), abs(signed(n, ny))) >= 2)
+    for k0 in sorted(centres):
         power = sum(p for k, p, _, _ in modes if 0.75 * k0 <= k <= 1.3 * k0)
         if best is None or power > best[0]:
             best = (power, k0)
@@ -160,12 +163,17 @@ def fundamental(field, lx, ly):
     mean = F[0][0].real / (nx * ny)
     fund = [[mean + sum((F[m][n] * cmath.exp(2j * math.pi * (m * i / nx + n * j / ny))).real for _, _, m, n in shell)
              / (nx * ny) for j in range(ny)] for i in range(nx)]
-    return mean, fund, 1.0 / kmean if kmean > 0 else float("nan")
+    # The variance below and above the band (Parseval: power / (nx ny)^2 per mode).
+    scale = 1.0 / (nx * ny) ** 2
+    below = scale * sum(p for k, p, _, _ in modes if k < 0.75 * k0)
+    above = scale * sum(p for k, p, _, _ in modes if k > 1.3 * k0)
+    band = scale * sum(p for _, p, _, _ in shell)
+    return mean, fund, 1.0 / kmean if kmean > 0 else float("nan"), below, band, above
 
 
 def measures(field, lx, ly):
     nx, ny = len(field), len(field[0])
-    mean, fund, lam = fundamental(field, lx, ly)
+    mean, fund, lam, below, band, above = fundamental(field, lx, ly)
     values = [v for row in field for v in row]
     ptp = max(values) - min(values)
     dev = [field[i][j] - fund[i][j] for i in range(nx) for j in range(ny)]
@@ -176,6 +184,9 @@ def measures(field, lx, ly):
         "dev_max": max(abs(d) for d in dev) / ptp,
         "dev_rms": math.sqrt(sum(d * d for d in dev) / len(dev)) / ptp,
         "harmonic": (sum(d * d for d in dev) / len(dev)) / var if var > 0 else 0.0,
+        "below": below / var if var > 0 else 0.0,
+        "above": above / var if var > 0 else 0.0,
+        "band_rms": math.sqrt(band),
         "fund": fund,
     }
 
@@ -241,7 +252,7 @@ def procedural(ps):
     (two tips per cell: (0, 0) and (1/2, sqrt(3)/2))."""
     nx, ny = 24, 42
     lx, ly = 1.0, math.sqrt(3.0)
-    print("p  dev_max  dev_rms  harmonic")
+    print("p  dev_max  dev_rms  above")
     for p in ps:
         field = []
         for i in range(nx):
@@ -254,7 +265,7 @@ def procedural(ps):
                 row.append(sharpened(hex_profile(a, b), p))
             field.append(row)
         r = measures(field, lx, ly)
-        print("%g  %.3f  %.3f  %.3f" % (p, r["dev_max"], r["dev_rms"], r["harmonic"]))
+        print("%g  %.3f  %.3f  %.3f" % (p, r["dev_max"], r["dev_rms"], r["above"]))
 
 
 def main():
@@ -281,6 +292,8 @@ def main():
         lx, ly = (float(v) for v in a.period.split(","))
     except ValueError:
         sys.exit("spike_profile.py: --period must be LX,LY in metres (got %r)" % a.period)
+    if not (lx > 0 and ly > 0):
+        sys.exit("spike_profile.py: --period must be positive (got %r)" % a.period)
     windows = []
     for w in a.window:
         parts = w.split(":")
@@ -299,7 +312,7 @@ def main():
             if line.startswith("comment time "):
                 times[path] = float(line.split()[2])
                 break
-    print("label  frames  ptp_mm  lambda_mm  dev_max  dev_rms  harmonic  move")
+    print("label  frames  ptp_mm  lambda_mm  dev_max  dev_rms  below  above  band_mm  move")
     cuts = []
     for label, t0, t1 in windows:
         chosen = [p for p in files if t0 - 1e-6 <= times.get(p, -1) <= t1 + 1e-6]
@@ -308,6 +321,8 @@ def main():
         fields, rows = [], []
         for path in chosen:
             header, pts = read_ply(path)
+            if "spacing" not in header:
+                sys.exit("spike_profile.py: %s has no 'comment spacing' (not a ferro-sim particle file?)" % path)
             s = float(header["spacing"])
             grid = Grid(lx, ly, a.cell if a.cell > 0 else 0.5 * s)
             fields.append(surface_heights(pts, grid, s))
@@ -322,9 +337,9 @@ def main():
         def mean(key):
             return sum(r[key] for r in rows) / len(rows)
 
-        print("%s  %d  %.2f  %.2f  %.3f  %.3f  %.3f  %s" % (
+        print("%s  %d  %.2f  %.2f  %.3f  %.3f  %.3f  %.3f  %.4f  %s" % (
             label, len(chosen), 1e3 * mean("ptp"), 1e3 * lams[len(lams) // 2], mean("dev_max"), mean("dev_rms"),
-            mean("harmonic"), "%.3f" % (sum(moves) / len(moves)) if moves else "nan"))
+            mean("below"), mean("above"), 1e3 * mean("band_rms"), "%.3f" % (sum(moves) / len(moves)) if moves else "nan"))
         sys.stdout.flush()
         for t, v, f in profile_cut(fields[-1], rows[-1]["fund"], grid):
             cuts.append((label, t, v, f))
