@@ -35,7 +35,9 @@ struct SpikeParams {
         Growth    ///< the wavenumber of fastest growth at the strongest |M| of the growth time
                   ///< (fastestGrowingWavenumber: a deep layer of the scene's viscosity): k_c at
                   ///< onset, growing with the field as measured after field jumps (Reimann et
-                  ///< al. 2000); the same tip distances for that k
+                  ///< al. 2000); the same tip distances for that k. For a field switched on
+                  ///< fast: under an approaching magnet the lattice re-lays and tips pop
+                  ///< (measured with ferro-tips, docs/physics/spikes.md)
     };
     bool enabled = true;             ///< false: copy the surface unchanged
     Spacing spacing = Spacing::Paper;
