@@ -801,14 +801,16 @@ TEST_CASE("particle files carry H, M and the magnets at the frame's time, and re
 // pressure built up in expanding fluid and pumped it (this half-size dish at the paper's
 // spacing: 90-100 mm/s RMS for good; the full dish 30-40 mm/s). WCSPH settled all along.
 // At rest the heap must then stand in ferrohydrostatic balance along its surface.
-TEST_CASE("a pool over a magnet held still comes to rest in ferrohydrostatic balance (DFSPH and WCSPH)", "[magnetics][slow]") {
-    struct Case {
-        std::string solver, magnetization;
-        double susceptibility;
-        std::string curveFit = "free_surface";   // the default
-    };
-    const Case c = GENERATE(Case{"dfsph", "external", 1.5}, Case{"wcsph", "external", 1.5}, Case{"dfsph", "auto", 0.5},
-                            Case{"dfsph", "auto", 1.5}, Case{"wcsph", "auto", 1.5});
+namespace {
+
+struct RestingPoolCase {
+    std::string solver, magnetization;
+    double susceptibility;
+    std::string curveFit = "free_surface";   // the default
+};
+
+void checkRestingPool(const RestingPoolCase& c)
+{
     // examples/ferrohydrostatic_pool.toml: 2,560 particles, a 3 A m^2 dipole 2 cm under the floor.
     FluidSimulation sim(loadExample("ferrohydrostatic_pool.toml",
                                     {"sim.solver=\"" + c.solver + "\"", "magnetization.solver=\"" + c.magnetization + "\"",
@@ -855,6 +857,21 @@ TEST_CASE("a pool over a magnet held still comes to rest in ferrohydrostatic bal
         REQUIRE(law.traction > 0.2 * law.pressure);   // the traction term matters here
         REQUIRE(law.worst < (c.susceptibility < 1 ? 0.20 : 0.40) * law.rise);
     }
+}
+
+} // namespace
+
+// Since 2026-12-05 the suite runs four of the five cases, to buy back suite time: WCSPH with
+// the analytic (external) field stays a hidden case, ferro_sph_tests "[.wcsph-external]";
+// WCSPH is held by its self-consistent case, the analytic force by DFSPH's.
+TEST_CASE("a pool over a magnet held still comes to rest in ferrohydrostatic balance (DFSPH and WCSPH)", "[magnetics][slow]") {
+    checkRestingPool(GENERATE(RestingPoolCase{"dfsph", "external", 1.5}, RestingPoolCase{"dfsph", "auto", 0.5},
+                              RestingPoolCase{"dfsph", "auto", 1.5}, RestingPoolCase{"wcsph", "auto", 1.5}));
+}
+
+TEST_CASE("a pool over a magnet held still comes to rest in ferrohydrostatic balance (WCSPH, analytic field)",
+          "[magnetics][slow][.wcsph-external]") {
+    checkRestingPool(RestingPoolCase{"wcsph", "external", 1.5});
 }
 
 // Issue 29: at fine spacing a pool over the same magnet never came to rest (a 12.5 mm dish at
