@@ -153,7 +153,7 @@ fi
 
 # One spike's profile: the cut through the tallest peak of the last frame at 1.1 x critical on
 # the way up, the surface against its fundamental Fourier mode.
-python3 "$root/scripts/bench/spike_profile.py" --procedural 1,1.25,1.5,2,3 > "$work/procedural.txt"
+python3 "$root/scripts/bench/spike_profile.py" --procedural 1,1.25,1.5,2,3,4,5 > "$work/procedural.txt"
 first_mm="$(awk -v s="${spacings%% *}" 'BEGIN { printf "%g", s * 1e3 }')"
 awk -F, -v mm="$first_mm" 'NR > 1 && $1 == mm && $2 == "up_1.1" { print $3, $4, $5 }' "$out/field_profile_cut.csv" > "$work/cut_1.1.dat"
 if command -v gnuplot > /dev/null && [[ -s "$work/cut_1.1.dat" ]]; then
