@@ -17,23 +17,26 @@ The surface: along vertical lines on a grid of cells C wide (default half a part
 spacing), the height where the particles' colour field sum_j s^3 W(|x - x_j|, s) (cubic spline,
 support 2 s, s the spacing; 1 inside the fluid) falls to 0.5. Its box modes (a direct DFT over
 the periodic grid) split it in three: the mean, the fundamental (the band of modes with
-wavenumbers within 0.75-1.3 of the centre that holds the most power: the pattern's wave
-vectors, which a box of a few wavelengths only approximately holds), and the rest (the harmonics, and the box-scale
-modulation). Each frame of a window [T0, T1] is measured alone (peaks that wander would blur
+wavenumbers within 0.75-1.3 of the centre that holds the most power, the centre a mode of
+at least two wavelengths across the box: the pattern's wave vectors, which a box of a few
+wavelengths only approximately holds), and the rest: longer modes (the box-scale unequal
+heights of a few peaks) and shorter ones (the harmonics). Each frame of a window [T0, T1] is measured alone (peaks that wander would blur
 an averaged surface) and the window prints the frames' means:
   ptp_mm      the surface's peak-to-trough height
   lambda_mm   the fundamental band's power-weighted wavelength (the median over the frames)
   dev_max     max |surface - (mean + fundamental)| over the box, over ptp: Gollwitzer's "within
               10 %" read as the largest deviation against the spike's height
   dev_rms     the same deviation's RMS over ptp
-  harmonic    the share of the pattern's variance outside the fundamental
+  below       the share of the surface's variance in modes longer than the band (disorder)
+  above       the share in modes shorter than the band (harmonics: the shape)
+  band_mm     the fundamental band's RMS amplitude
   move        RMS change of the surface from one frame to the next, over ptp (a standing
               pattern: the column jitter only; peaks that wander: of order 1)
 --profile-csv writes one spike's profile per window, from its last frame: a cut from the
 highest point through the nearest other peak, the surface and its fundamental against the
 distance.
 
---procedural: the same measures on Ferro's hexagonal profile (spikes/SpikePhysics.hpp:
+--procedural: dev_max, dev_rms and above on Ferro's hexagonal profile (spikes/SpikePhysics.hpp:
 hexProfile sharpened by sharpenedProfile with exponent p) sampled on one periodic cell of the
 lattice (tip spacing l by sqrt(3) l).
 """
@@ -183,7 +186,6 @@ def measures(field, lx, ly):
         "lambda": lam,
         "dev_max": max(abs(d) for d in dev) / ptp,
         "dev_rms": math.sqrt(sum(d * d for d in dev) / len(dev)) / ptp,
-        "harmonic": (sum(d * d for d in dev) / len(dev)) / var if var > 0 else 0.0,
         "below": below / var if var > 0 else 0.0,
         "above": above / var if var > 0 else 0.0,
         "band_rms": math.sqrt(band),
