@@ -31,7 +31,7 @@ struct TipSums {
 TipSums sumNearbyTips(const Pattern& pat, const Vec3d& x)
 {
     const double R = pat.info.spacing, Rn = 0.75 * R;
-    const bool square = pat.info.lattice == SpikeParams::Lattice::Square;
+    const double squareness = pat.info.squareness;
     TipSums sums;
     pat.grid->forEachWithin(x, R, [&](uint32_t t, double d2) {
         const Tip& tip = pat.tips[t];
@@ -42,7 +42,7 @@ TipSums sumNearbyTips(const Pattern& pat, const Vec3d& x)
         // A tip left out (defects) lends the blend a flat surface instead of its profile, so
         // the gap is a smooth patch rather than a peakless ring of troughs; at the tip itself
         // the height is its presence times its full height.
-        sums.s += wt * tip.presence * (square ? squareProfile(ab.x(), ab.y()) : hexProfile(ab.x(), ab.y()));
+        sums.s += wt * tip.presence * morphProfile(ab.x(), ab.y(), squareness);
         sums.w += wt;
         if (d2 < Rn * Rn) {
             const double qn = 1.0 - d2 / (Rn * Rn);

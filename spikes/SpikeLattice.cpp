@@ -75,7 +75,15 @@ struct TraceFrame {
     Vec3d x0, n0, e1, e1perp;
     double l;
     double maxTilt;   // [deg] the drop direction's largest angle from n0 (SpikeParams::maxTilt)
-    bool square;      // the square planform: e2 = e1perp instead of 60 degrees from e1
+    double squareness; // the planform: 0 hexagon, 1 square (SpikePattern::squareness)
+    /// The second lattice axis (unit): e1 turned by latticeAngle(squareness) towards e1perp.
+    Vec3d e2() const
+    {
+        if (squareness <= 0) return 0.5 * e1 + 0.8660254037844386 * e1perp;
+        if (squareness >= 1) return e1perp;
+        const double theta = latticeAngle(squareness);
+        return std::cos(theta) * e1 + std::sin(theta) * e1perp;
+    }
 };
 
 // The tips traced so far; the first tip at lattice coordinates (i, j) wins.
@@ -189,7 +197,7 @@ std::pair<int, int> carriedAnchor(const TraceFrame& f, const SpikeParams& P, int
     if (!(P.responseTime > 0) || !in.flow) return {0, 0};
     d0 = in.flow->carriedOffset(f.x0, f.n0, magnet, P.responseTime, in.time, fieldHold(f));
     // d0 in lattice coordinates: d0 = (a e1 + b e2) l along the surface at x0.
-    const Vec3d e2 = f.square ? f.e1perp : Vec3d(0.5 * f.e1 + 0.8660254037844386 * f.e1perp);
+    const Vec3d e2 = f.e2();
     const double b = d0.dot(f.e1perp) / (f.l * e2.dot(f.e1perp));
     const double a = (d0.dot(f.e1) - b * f.l * e2.dot(f.e1)) / f.l;
     const int di = int(std::lround(a)), dj = int(std::lround(b));
@@ -285,13 +293,19 @@ void traceAxes(const TraceFrame& f, int maxRings, LatticeTips& lattice, std::vec
     }
 }
 
-// The square planform's tips: the i axis traced both ways from x0, then from each of its tips a
-// row both ways along e2 (90 degrees from e1), every line by traceLine. Rings around x0 would
-// be diamonds (|i| + |j| = r between two axes) that miss the corners of a round supercritical
-// region; rows reach every tip the region holds. Returns the most tips a line reached.
-int traceSquare(const TraceFrame& f, int maxRings, LatticeTips& lattice)
+// The tips in rows: the i axis traced both ways from x0, then from each of its tips a row both
+// ways along e2 (90 degrees from e1 on a square, 60 + 30 squareness degrees on a morphing
+// lattice), every line by traceLine. Rings around x0 would be diamonds on a square
+// (|i| + |j| = r between two axes) that miss the corners of a round supercritical region; rows
+// reach every tip the region holds. On an oblique lattice (e2 not at 90 degrees) a point at
+// distance R in the region has |i| up to R / (l sin theta), beyond the axis's last live tip:
+// the axis goes on that far (ignoring the field) and rows start from those tips too, each at
+// most that long. Returns the most tips a line reached.
+int traceRows(const TraceFrame& f, int maxRings, LatticeTips& lattice)
 {
     addTip(lattice, 0, 0, f.x0, f.n0);
+    const Vec3d e2 = f.e2();
+    const double sinTheta = std::max(e2.dot(f.e1perp), 0.5);
     std::vector<Vec3d> axis[2] = {{f.x0}, {f.x0}};
     const Vec3d n0 = f.normals.at(f.x0, f.n0);
     const bool live0 = alive(f, f.x0, f.n0);
@@ -299,6 +313,7 @@ int traceSquare(const TraceFrame& f, int maxRings, LatticeTips& lattice)
     traceLine(f, f.x0, n0, live0, -f.e1, 0, 0, -1, 0, maxRings, lattice, &axis[1]);
     int most = int(std::max(axis[0].size(), axis[1].size())) - 1;
     for (int side = 0; side < 2; ++side) {
+        const int sign = side == 0 ? 1 : -1;
         // Rows start from every axis tip up to the axis's last supercritical one (tips before it
         // may be subcritical: the top of a heap), not from the dead tips that end the axis: a
         // row from there would never meet a live tip, so nothing would end it before the wall.
@@ -308,12 +323,29 @@ int traceSquare(const TraceFrame& f, int maxRings, LatticeTips& lattice)
             live[r] = alive(f, axis[side][r], f.normals.at(axis[side][r], f.n0));
             if (live[r]) lastLive = r;
         }
-        for (size_t r = side == 0 ? 0 : 1; r <= lastLive; ++r) { // the origin's rows once
-            const int i = side == 0 ? int(r) : -int(r);
+        // An oblique lattice's reach beyond it: the axis continued to (lastLive + 1) / sin theta
+        // (at least the traced axis), its rows from there bounded by that length.
+        size_t lastRow = lastLive;
+        int reach = maxRings;
+        if (sinTheta < 1 - 1e-12 && lastLive > 0) {
+            reach = std::min(maxRings, int(std::ceil(double(lastLive + 1) / sinTheta)) + 2);
+            const int extra = reach - int(axis[side].size() - 1);
+            if (extra > 0) {
+                const size_t r0 = axis[side].size() - 1;
+                const Vec3d s = axis[side][r0];
+                traceLine(f, s, f.normals.at(s, f.n0), false, double(sign) * f.e1, sign * int(r0), 0, sign, 0, extra,
+                          lattice, &axis[side]);
+                live.resize(axis[side].size(), 0);
+            }
+            lastRow = axis[side].size() - 1;
+        }
+        for (size_t r = side == 0 ? 0 : 1; r <= lastRow; ++r) { // the origin's rows once
+            const int i = sign * int(r);
             const Vec3d s = axis[side][r], n = f.normals.at(s, f.n0);
+            const bool beyond = r > lastLive;
             for (const int dj : {1, -1}) {
                 std::vector<Vec3d> row;
-                traceLine(f, s, n, live[r] != 0, double(dj) * f.e1perp, i, 0, 0, dj, maxRings, lattice, &row);
+                traceLine(f, s, n, live[r] != 0, double(dj) * e2, i, 0, 0, dj, beyond ? reach : maxRings, lattice, &row);
                 most = std::max(most, int(row.size()));
             }
         }
@@ -350,7 +382,7 @@ int fillRings(const TraceFrame& f, const std::vector<Vec3d> (&axisTips)[6], Latt
 Eigen::Matrix<double, 2, 3> tipLatticeMap(const TraceFrame& f, const LatticeTips& lattice, const Tip& tip)
 {
     const double l = f.l;
-    const Vec3d e1 = f.e1, e1perp = f.e1perp, n0 = f.n0;
+    const Vec3d e1 = f.e1, n0 = f.n0;
     auto basis = [&](int di, int dj, const Vec3d& flat) {
         Vec3d plus, minus;
         const bool hasPlus = tipPosition(lattice, tip.i + di, tip.j + dj, plus);
@@ -360,7 +392,7 @@ Eigen::Matrix<double, 2, 3> tipLatticeMap(const TraceFrame& f, const LatticeTips
         if (hasMinus) return Vec3d(tip.position - minus);
         return Vec3d(l * (flat - flat.dot(tip.normal) * tip.normal).normalized());
     };
-    const Vec3d f1 = e1, f2 = f.square ? e1perp : Vec3d(0.5 * e1 + std::sqrt(0.75) * e1perp);
+    const Vec3d f1 = e1, f2 = f.e2();
     auto frame = [&](const Vec3d& b1, const Vec3d& b2) {
         Eigen::Matrix3d A;
         A.col(0) = b1;
@@ -415,16 +447,16 @@ void traceLattice(Pattern& pat, const FreeSurface& surface, const SurfaceFields&
     const double l = pat.info.spacing;
     const Vec3d n0 = pat.info.normal, e1 = pat.info.axis;
     const SmoothNormals normals(surface, 0.5 * l);
-    const bool square = pat.info.lattice == SpikeParams::Lattice::Square;
-    const TraceFrame foot{surface, normals, fields, Mc, pat.info.origin, n0, e1, n0.cross(e1), l, P.maxTilt, square};
+    const double squareness = pat.info.squareness;
+    const TraceFrame foot{surface, normals, fields, Mc, pat.info.origin, n0, e1, n0.cross(e1), l, P.maxTilt, squareness};
     Vec3d anchor, d0;
     const auto [di, dj] = carriedAnchor(foot, P, pat.info.magnet, anchor, d0);
     pat.info.origin = anchor;
-    const TraceFrame frame{surface, normals, fields, Mc, anchor, n0, e1, n0.cross(e1), l, P.maxTilt, square};
+    const TraceFrame frame{surface, normals, fields, Mc, anchor, n0, e1, n0.cross(e1), l, P.maxTilt, squareness};
     LatticeTips lattice;
     const int maxRings = int(std::ceil(diagonal / l)) + 1;
-    if (square) {
-        pat.info.rings = traceSquare(frame, maxRings, lattice);
+    if (squareness > 0 || P.morphs()) {
+        pat.info.rings = traceRows(frame, maxRings, lattice);
     } else {
         std::vector<Vec3d> axisTips[6];
         traceAxes(frame, maxRings, lattice, axisTips);

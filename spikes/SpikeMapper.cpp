@@ -117,11 +117,13 @@ bool patternOrigin(const PlacementContext& c, const Magnet& magnet, const Vec3d&
 
 // The tip spacing l [m], clamped to [P.minSpacing, P.maxSpacing]: eq. 15, l = alpha / |H(x0)|
 // with |H0| [A/m] at the origin (SurfaceFields::fieldHistoryPeak: the strongest of the growth
-// time's history), or the tip distance of a wavenumber k on the planform (4 pi / (sqrt3 k) on a
-// hexagon, 2 pi / k on a square): the critical k_c = 2 pi / lambda_c, or the fastest-growing
-// one at M0 [A/m] (the strongest |M| of the growth time) against Mc [A/m]. g [m/s^2].
+// time's history), or the tip distance of a wavenumber k on the planform of that squareness:
+// 2 pi / (k sin theta), theta = 60 + 30 squareness degrees between e1 and e2 (the lattice whose
+// two shortest wave vectors have length k: 4 pi / (sqrt3 k) on a hexagon, 2 pi / k on a
+// square); k the critical k_c = 2 pi / lambda_c, or the fastest-growing one at M0 [A/m] (the
+// strongest |M| of the growth time) against Mc [A/m]. g [m/s^2].
 double tipSpacing(const SpikeInput& in, const SpikeParams& P, double g, double H0, double M0, double Mc,
-                  SpikeParams::Lattice lattice)
+                  double squareness)
 {
     double l = 0;
     if (P.spacing == SpikeParams::Spacing::Paper) {
@@ -139,9 +141,7 @@ double tipSpacing(const SpikeInput& in, const SpikeParams& P, double g, double H
             modes.supercriticality = (M0 / Mc) * (M0 / Mc);
             k = fastestGrowingWavenumber(modes);
         }
-        l = !(k > 0)                                    ? 0.0
-            : lattice == SpikeParams::Lattice::Square ? 2 * kPi / k
-                                                      : tipSpacingForWavenumber(k);
+        l = !(k > 0) ? 0.0 : squareness > 0 ? 2 * kPi / (k * std::sin(latticeAngle(squareness))) : tipSpacingForWavenumber(k);
     }
     return std::clamp(l, P.minSpacing, P.maxSpacing);
 }
@@ -192,7 +192,8 @@ std::vector<Pattern> placePatterns(const PlacementContext& c, double g, double M
         pat.info.field = H0.norm();
         pat.info.magnetization = M0;
         pat.info.lattice = c.P.latticeOf(int(m));
-        pat.info.spacing = tipSpacing(in, c.P, g, c.fields.fieldHistoryPeak(x0, n0, H0), M0, Mc, pat.info.lattice);
+        pat.info.squareness = c.P.squarenessOf(int(m));
+        pat.info.spacing = tipSpacing(in, c.P, g, c.fields.fieldHistoryPeak(x0, n0, H0), M0, Mc, pat.info.squareness);
         pat.info.axis = latticeAxis(n0, c.P.orientation);
         bool duplicate = false;
         for (const Pattern& other : patterns)
@@ -301,7 +302,8 @@ std::vector<Pattern> tracePatterns(const SpikeInput& in, const SpikeParams& P, c
     if (patterns.empty()) return {};
 
     // 3. Tips (Fig. 7): a hexagon traces six axes along the surface and fills the rings between
-    // them; a square traces the i axis both ways and rows along e2 from its tips.
+    // them; a square, and every lattice of a shot whose hexagons morph, traces the i axis both
+    // ways and rows along e2 from its tips.
     for (Pattern& pat : patterns) traceLattice(pat, freeSurface, fields, P, Mc, diagonal);
     settleSeams(patterns, in.magnets);
     return patterns;

@@ -102,12 +102,14 @@ struct SpikePattern {
     double magnetization = 0; ///< |M(x0)| [A/m]
     int rings = 0;          ///< rings traced around x0 (a square: the most tips one traced line reached)
     SpikeParams::Lattice lattice = SpikeParams::Lattice::Hexagon; ///< the planform (SpikeParams::latticeOf)
+    double squareness = 0;  ///< 0 = hexagons, 1 = squares, between: the morph (SpikeParams::squarenessOf)
 };
 
 struct SpikeTip {
     int pattern = -1;
     int i = 0, j = 0;       ///< lattice coordinates: base = x0 + i l e1 + j l e2 on a flat surface
-                            ///< (e2 at 60 degrees from e1 on a hexagon, 90 on a square)
+                            ///< (e2 at 60 degrees from e1 on a hexagon, 90 on a square,
+                            ///< 60 + 30 squareness between)
     Vec3d base;             ///< tip position on the undisplaced surface [m]
     Vec3d apex;             ///< base + height * direction [m]
     Vec3d direction;        ///< unit growth direction (the local field, outward)

@@ -15,6 +15,7 @@ double heightGain(const TableReader& r, double def) { return r.numberInRange("he
 double sharpness(const TableReader& r, double def) { return r.numberInRange("sharpness", def, 1, 8); }
 double jitter(const TableReader& r, double def) { return r.numberInRange("jitter", def, 0, 0.35); }
 double defects(const TableReader& r, double def) { return r.numberInRange("defects", def, 0, 0.9); }
+double squareness(const TableReader& r, double def) { return r.numberInRange("squareness", def, 0, 1); }
 
 } // namespace
 
@@ -26,6 +27,7 @@ SpikeParams spikeParamsAt(const SpikeParams& p, double t)
     q.sharpness = monotoneKeyValue(p.keys, t, [](const SpikeKey& k) { return k.sharpness; }, p.sharpness);
     q.jitter = monotoneKeyValue(p.keys, t, [](const SpikeKey& k) { return k.jitter; }, p.jitter);
     q.defects = monotoneKeyValue(p.keys, t, [](const SpikeKey& k) { return k.defects; }, p.defects);
+    q.squareness = monotoneKeyValue(p.keys, t, [](const SpikeKey& k) { return k.squareness; }, p.squareness);
     return q;
 }
 
@@ -49,6 +51,7 @@ SpikeParams parseSpikeParams(const SceneDocument& doc)
     p.heightGain = heightGain(r, p.heightGain);
     p.jitter = jitter(r, p.jitter);
     p.defects = defects(r, p.defects);
+    p.squareness = squareness(r, p.squareness);
     p.seed = uint32_t(r.integerInRange("seed", 0, 0, INT_MAX));
     p.magnetizationFade = r.positive("magnetization_fade", p.magnetizationFade);
     p.heightCurve = r.choice("height_curve", {"fade", "bifurcation"}, "fade") == "bifurcation"
@@ -91,6 +94,7 @@ SpikeParams parseSpikeParams(const SceneDocument& doc)
         key.sharpness = sharpness(k, p.sharpness);
         key.jitter = jitter(k, p.jitter);
         key.defects = defects(k, p.defects);
+        key.squareness = squareness(k, p.squareness);
         k.finish();
         p.keys.push_back(key);
     }

@@ -18,6 +18,7 @@ struct SpikeKey {
     double sharpness = 1;   ///< SpikeParams::sharpness
     double jitter = 0;      ///< SpikeParams::jitter
     double defects = 0;     ///< SpikeParams::defects
+    double squareness = 0;  ///< SpikeParams::squareness
 };
 
 struct SpikeParams {
@@ -50,6 +51,19 @@ struct SpikeParams {
             if (magnet == m) return l;
         return lattice;
     }
+    /// How far magnet m's lattice has morphed from hexagons (0) to squares (1): `squareness`
+    /// on a hexagon planform, 1 on a square one (a magnet's [[spikes.magnets]] pattern wins).
+    double squarenessOf(int m) const { return latticeOf(m) == Lattice::Square ? 1.0 : squareness; }
+    /// The tips are traced in rows (traceLattice) for every frame of a shot whose hexagons
+    /// morph: `squareness` above 0 in [spikes] or any key. Then the tips a frame lays out do
+    /// not switch between the ring trace (the paper's hexagons) and the rows mid-shot.
+    bool morphs() const
+    {
+        if (squareness > 0) return true;
+        for (const SpikeKey& k : keys)
+            if (k.squareness > 0) return true;
+        return false;
+    }
     double alpha = 60.0;             ///< eq. 15 constant [A]: l = 1 cm at |H(x0)| = 6 kA/m
     double beta = 1.5e-7;            ///< eq. 14 constant [m per A/m]: C0 = beta |H|; tips stand 3 C0
                                      ///< above the mean level, troughs 1.5 C0 below
@@ -73,6 +87,14 @@ struct SpikeParams {
                                      ///< are left out (each sinks over a band of 0.05 below its
                                      ///< threshold, so raising it over keys sinks tips one by one);
                                      ///< which tips is fixed by seed and lattice coordinates
+    double squareness = 0.0;         ///< the hexagons' morph into squares, in [0, 1]: eq. 12's lattice
+                                     ///< with e2 at 60 + 30 squareness degrees from e1 and the profile
+                                     ///< blended from eq. 13 to the square one; 0 = the paper's
+                                     ///< hexagons, 1 = `pattern = "square"`. Keyed over frames, each tip
+                                     ///< keeps its lattice coordinates and slides to its new site, so
+                                     ///< none is born or dies inside the pattern. The field at which a
+                                     ///< real layer turns to squares could not be read here (Abou et
+                                     ///< al. 2001, Gollwitzer et al. 2006): the art director keys it
     uint32_t seed = 0;               ///< the irregularity's random seed (jitter and defects)
     std::vector<SpikeKey> keys;      ///< [[spikes.keys]] in time order; empty = the values above
     /// How a spike's height follows the supercriticality eps = |M| / M_c - 1.
@@ -129,7 +151,7 @@ struct SpikeParams {
     bool conserveVolume = true;      ///< restore the enclosed volume after displacement
 };
 
-/// The parameters at time t [s]: heightGain, sharpness, jitter and defects interpolated between
+/// The parameters at time t [s]: heightGain, sharpness, jitter, defects and squareness interpolated between
 /// the keys (monotone cubic, sim/core/Keyframes.hpp: never past a key's value), the rest as
 /// given. No keys: a copy of p.
 SpikeParams spikeParamsAt(const SpikeParams& p, double t);

@@ -82,6 +82,19 @@ double hexProfile(double a, double b);
 /// the mean level), the sharpening and the volume work unchanged on either planform.
 double squareProfile(double a, double b);
 
+/// The angle [rad] between the lattice axes e1 and e2 of a planform of that squareness in
+/// [0, 1]: 60 degrees on a hexagon (0), 90 on a square (1), linear between.
+inline double latticeAngle(double squareness) { return kPi / 3.0 * (1.0 + 0.5 * squareness); }
+
+/// The planform morphing from hexagons (s = 0) to squares (s = 1), in the lattice coordinates
+/// (a, b) of axes e1, e2 at latticeAngle(s): (1 - s) hexProfile + s squareProfile. Both are
+/// eq. 12 on the same tips (F = 3 at integer a, b) with mean 0 over the cell, so the blend
+/// keeps the tips, their height and the volume; F >= -1.5.
+inline double morphProfile(double a, double b, double s)
+{
+    return s <= 0 ? hexProfile(a, b) : s >= 1 ? squareProfile(a, b) : (1 - s) * hexProfile(a, b) + s * squareProfile(a, b);
+}
+
 /// The hexagons' amplitude equation near onset (weakly nonlinear theory of the normal-field
 /// instability; Gailitis 1977, Friedrichs & Engel 2001), in the supercriticality
 /// eps = M / M_c - 1 and the amplitude a relative to full height:

@@ -788,6 +788,122 @@ TEST_CASE("spikes.pattern = square: tips on a square lattice at l, four neighbou
             Approx(criticalWavelength(1200 - 1.2, 9.81, 0.025)).epsilon(1e-9));
 }
 
+TEST_CASE("the morphing planform keeps the tips at 3, the troughs above -1.5 and the cell's mean at zero",
+          "[spikes][physics]")
+{
+    REQUIRE(latticeAngle(0) == Approx(kPi / 3));
+    REQUIRE(latticeAngle(1) == Approx(kPi / 2));
+    const int n = 120;
+    for (const double sq : {0.0, 0.25, 0.5, 0.8, 1.0}) {
+        INFO("squareness " << sq);
+        REQUIRE(morphProfile(0, 0, sq) == Approx(3.0));
+        REQUIRE(morphProfile(-2, 3, sq) == Approx(3.0));
+        double mean = 0, lowest = 3;
+        for (int i = 0; i < n; ++i)
+            for (int j = 0; j < n; ++j) {
+                const double a = (i + 0.5) / n, b = (j + 0.5) / n, F = morphProfile(a, b, sq);
+                REQUIRE(F <= 3.0);
+                mean += F;
+                lowest = std::min(lowest, F);
+            }
+        REQUIRE(mean / (n * n) == Approx(0.0).margin(1e-9));
+        REQUIRE(lowest >= -1.5 - 1e-9);
+        REQUIRE(lowest < -1.0); // still a trough, not a plateau
+    }
+    REQUIRE(morphProfile(0.3, 0.1, 0) == hexProfile(0.3, 0.1));
+    REQUIRE(morphProfile(0.3, 0.1, 1) == squareProfile(0.3, 0.1));
+}
+
+TEST_CASE("squareness lays the tips on e1 and e2 at 60 + 30 squareness degrees; 1 is the square planform",
+          "[spikes][look]")
+{
+    const double lambda = criticalWavelength(1200 - 1.2, 9.81, 0.025);
+    for (const double sq : {0.0, 0.5, 1.0}) {
+        INFO("squareness " << sq);
+        std::ostringstream keys;
+        keys << "spacing = \"physical\"\nsquareness = " << sq << "\n";
+        const SpikeResult res = lookFrame(keys.str());
+        REQUIRE(res.patterns.size() == 1);
+        const double theta = kPi / 3 * (1 + 0.5 * sq);
+        // The two shortest wave vectors stay at k_c: l = lambda_c / sin theta.
+        const double l = res.patterns[0].spacing;
+        REQUIRE(l == Approx(lambda / std::sin(theta)).epsilon(1e-9));
+        const auto tips = tipsByIndex(res);
+        const Vec3d x0 = tips.at({0, 0}).base;
+        const Vec3d a = tips.at({1, 0}).base - x0, b = tips.at({0, 1}).base - x0;
+        REQUIRE(a.norm() == Approx(l).epsilon(0.01));
+        REQUIRE(b.norm() == Approx(l).epsilon(0.01));
+        REQUIRE(std::acos(a.normalized().dot(b.normalized())) == Approx(theta).margin(0.01));
+        // Every tip stands where its lattice coordinates put it on the flat pool.
+        double worst = 0, reach = 0;
+        for (const auto& [ij, tip] : tips) {
+            worst = std::max(worst, (tip.base - (x0 + ij.first * a + ij.second * b)).norm());
+            reach = std::max(reach, (tip.base - x0).norm());
+        }
+        REQUIRE(worst < 0.02 * l);
+        // The lattice covers the round pool whatever its angle: tips reach 0.6 of the pool's
+        // radius in every direction (the supercritical region is the whole free surface).
+        for (int k = 0; k < 12; ++k) {
+            const Vec3d dir(std::cos(k * kPi / 6), std::sin(k * kPi / 6), 0);
+            double along = 0;
+            for (const auto& [ij, tip] : tips) {
+                const Vec3d d = tip.base - x0;
+                if ((d - d.dot(dir) * dir).norm() < 0.6 * l) along = std::max(along, d.dot(dir));
+            }
+            INFO("direction " << k * 30 << " deg: reach " << along << " of the pool's " << kLookR);
+            REQUIRE(along > 0.6 * kLookR);
+        }
+        requireHealthy(res);
+    }
+    // squareness = 1 is pattern = "square", tip for tip.
+    const auto square = tipsByIndex(lookFrame("pattern = \"square\"\n")),
+               morphed = tipsByIndex(lookFrame("squareness = 1.0\n"));
+    REQUIRE(square.size() == morphed.size());
+    for (const auto& [ij, tip] : square) REQUIRE((morphed.at(ij).base - tip.base).norm() < 1e-9);
+    REQUIRE_THROWS_AS(lookFrame("squareness = 1.5\n"), SceneError);
+    REQUIRE_THROWS_AS(lookFrame("[[spikes.keys]]\ntime = 0.0\nsquareness = -0.1\n"), SceneError);
+}
+
+TEST_CASE("hexagons keyed into squares: every tip inside the pattern keeps its lattice coordinates and slides",
+          "[spikes][look]")
+{
+    // squareness keyed 0 -> 1 over 0.5 s on a flat pool in a uniform field, frames at 30 fps.
+    // Inside the pattern (one spacing within the outermost tip of both frames) no tip is born
+    // or dies from one frame to the next, and none moves more than a quarter spacing.
+    const std::string text = "[[spikes.keys]]\ntime = 0.0\nsquareness = 0.0\n[[spikes.keys]]\ntime = 0.5\nsquareness = 1.0\n";
+    std::map<std::pair<int, int>, SpikeTip> before;
+    double lBefore = 0;
+    Vec3d x0 = Vec3d::Zero();
+    int interiorPairs = 0;
+    for (int frame = 0; frame <= 16; ++frame) {
+        const double t = frame / 30.0;
+        const SpikeResult res = lookFrame(text, t);
+        REQUIRE(res.patterns.size() == 1);
+        const double l = res.patterns[0].spacing;
+        auto now = tipsByIndex(res);
+        x0 = now.at({0, 0}).base;
+        double rNow = 0;
+        for (const auto& [ij, tip] : now) rNow = std::max(rNow, (tip.base - x0).norm());
+        if (frame > 0) {
+            double rBefore = 0;
+            for (const auto& [ij, tip] : before) rBefore = std::max(rBefore, (tip.base - x0).norm());
+            const double inside = std::min(rNow, rBefore) - std::max(l, lBefore);
+            for (const auto& [ij, tip] : before) {
+                if ((tip.base - x0).norm() > inside) continue;
+                INFO("frame " << frame << ": tip (" << ij.first << ", " << ij.second << ") of the frame before");
+                REQUIRE(now.count(ij) == 1);
+                REQUIRE((now.at(ij).base - tip.base).norm() < 0.25 * l);
+                ++interiorPairs;
+            }
+            for (const auto& [ij, tip] : now)
+                if ((tip.base - x0).norm() <= inside) REQUIRE(before.count(ij) == 1);
+        }
+        before = std::move(now);
+        lBefore = l;
+    }
+    REQUIRE(interiorPairs > 16 * 20);
+}
+
 TEST_CASE("[[spikes.magnets]] gives one magnet its own planform and the other keeps the hexagon", "[spikes][look]")
 {
     const double R = 0.045;
