@@ -21,7 +21,8 @@ PACKAGES=(
 
 # --with-video: also ffmpeg, which the demo uses to assemble the rendered frames into a
 # video and a GIF (the tests do not need it, so CI does not install it).
-# --with-bench: also gnuplot, which scripts/bench.sh uses to plot the report.
+# --with-bench: also gnuplot, which scripts/bench.sh uses to plot the report, and NumPy, which
+# the field sweep's surface analysis (scripts/bench/spike_profile.py) needs.
 # --with-slurm: also Slurm (slurm-wlm: slurmctld, slurmd and the client commands) and munge,
 # for submitting shots (scripts/shot.sh --slurm) and for the suite's one-node cluster
 # (scripts/slurm/local-cluster.sh, tests/slurm); the test command installs them.
@@ -30,7 +31,7 @@ PACKAGES=(
 for arg in "$@"; do
   case "$arg" in
     --with-video) PACKAGES+=(ffmpeg) ;;
-    --with-bench) PACKAGES+=(gnuplot-nox) ;;
+    --with-bench) PACKAGES+=(gnuplot-nox python3-numpy) ;;
     --with-slurm) PACKAGES+=(slurm-wlm munge) ;;
     --with-blender) PACKAGES+=(blender) ;;
     *) echo "install-deps: error: unknown option $arg (--with-video, --with-bench, --with-slurm, --with-blender)" >&2; exit 2 ;;

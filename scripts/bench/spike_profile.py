@@ -10,7 +10,7 @@ troughs matter. This script measures the same thing on a simulated layer in a bo
 periodic sides, and on Ferro's procedural profile.
 
     scripts/bench/spike_profile.py FRAMES_DIR --period LX,LY --window LABEL:T0:T1 [...]
-                                   [--cell C] [--profile-csv OUT]
+                                   [--cell C] [--profile-csv OUT] [--spike-csv OUT]
     scripts/bench/spike_profile.py --procedural P1,P2,...
 
 The surface: along vertical lines on a grid of cells C wide (default half a particle
@@ -32,11 +32,20 @@ an averaged surface) and the window prints the frames' means:
   band_mm     the fundamental band's RMS amplitude
   move        RMS change of the surface from one frame to the next, over ptp (a standing
               pattern: the column jitter only; peaks that wander: of order 1)
---profile-csv writes one spike's profile per window, from its last frame: a cut from the
+  shape_dev   one spike's shape against the fundamental's: the mean spike (mean_spike: the
+              surface's azimuthal mean around each peak, over the peak's height above the mean
+              level, averaged over the peaks and frames, in r / lambda) against J0(2 pi r /
+              lambda), the fundamental's own profile about a tip; the largest difference out
+              to half a wavelength. Peaks of unequal height do not enter it (each is scaled by
+              its own height), so it measures shape, not disorder
+  peaks       the peaks averaged (all frames)
+--spike-csv writes each window's mean spike against J0. --profile-csv writes one spike's profile per window, from its last frame: a cut from the
 highest point through the nearest other peak, the surface and its fundamental against the
 distance.
 
---procedural: dev_max, dev_rms and above on Ferro's hexagonal profile (spikes/SpikePhysics.hpp:
+Needs NumPy (python3-numpy; scripts/install-deps.sh --with-bench).
+
+--procedural: dev_max, dev_rms, above and shape_dev on Ferro's hexagonal profile (spikes/SpikePhysics.hpp:
 hexProfile sharpened by sharpenedProfile with exponent p) sampled on one periodic cell of the
 lattice (tip spacing l by sqrt(3) l).
 """
@@ -47,19 +56,20 @@ import math
 import os
 import sys
 
+try:
+    import numpy as np
+except ImportError:
+    sys.exit("spike_profile.py: needs NumPy (apt install python3-numpy, or scripts/install-deps.sh --with-bench)")
+
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
 from rosensweig import read_ply  # noqa: E402
 
 
-def cubic_spline(r, h):
-    """The M4 cubic spline kernel in 3D, support 2 h."""
-    q = r / h
-    if q >= 2.0:
-        return 0.0
+def cubic_spline(q, h):
+    """The M4 cubic spline kernel in 3D, support 2 h, at q = r / h (an array)."""
     sigma = 1.0 / (math.pi * h ** 3)
-    if q < 1.0:
-        return sigma * (1.0 - 1.5 * q * q + 0.75 * q ** 3)
-    return sigma * 0.25 * (2.0 - q) ** 3
+    return sigma * np.where(q < 1.0, 1.0 - 1.5 * q * q + 0.75 * q ** 3,
+                            np.where(q < 2.0, 0.25 * (2.0 - np.minimum(q, 2.0)) ** 3, 0.0))
 
 
 class Grid:
@@ -74,118 +84,133 @@ class Grid:
 
 
 def surface_heights(pts, grid, s):
-    """The colour field's 0.5 level along each cell's vertical line [m]."""
+    """The colour field's 0.5 level along each cell's vertical line [m], an nx x ny array.
+    Every (particle, line) pair within 2 s horizontally (periodic) is listed once; the level
+    is bracketed from above in steps of s / 2 and bisected 8 times, all lines at once."""
     h = s
     reach = 2 * h
     volume = s ** 3
-    bins = {}
-    bx, by = max(1, int(grid.lx / reach)), max(1, int(grid.ly / reach))
-    wx, wy = grid.lx / bx, grid.ly / by
-    for x, y, z in pts:
-        bins.setdefault((math.floor(x / wx) % bx, math.floor(y / wy) % by), []).append((x, y, z))
-    out = [[0.0] * grid.ny for _ in range(grid.nx)]
-    for i in range(grid.nx):
-        for j in range(grid.ny):
-            cx, cy = grid.centre(i, j)
-            ci, cj = int(cx / wx), int(cy / wy)
-            near = []   # (horizontal distance^2, z) of the particles within reach of the line
-            # Each bin once (a box only one or two bins across would visit a bin twice).
-            for key in {((ci + a) % bx, (cj + b) % by) for a in (-1, 0, 1) for b in (-1, 0, 1)}:
-                for x, y, z in bins.get(key, ()):
-                    dx = x - cx - grid.lx * round((x - cx) / grid.lx)
-                    dy = y - cy - grid.ly * round((y - cy) / grid.ly)
-                    d2 = dx * dx + dy * dy
-                    if d2 < reach * reach:
-                        near.append((d2, z))
-            if not near:
-                out[i][j] = float("nan")
-                continue
+    nx, ny = grid.nx, grid.ny
+    cx, cy = grid.lx / nx, grid.ly / ny
+    p = np.asarray(pts, dtype=float).reshape(-1, 3)
+    x, y, z = p[:, 0], p[:, 1], p[:, 2]
+    ci, cj = np.floor(x / cx).astype(np.int64), np.floor(y / cy).astype(np.int64)
+    ri, rj = int(math.ceil(reach / cx)) + 1, int(math.ceil(reach / cy)) + 1
+    lines, d2s, zs, ids = [], [], [], []
+    index = np.arange(len(x))
+    for a in range(-ri, ri + 1):
+        for b in range(-rj, rj + 1):
+            li, lj = (ci + a) % nx, (cj + b) % ny
+            dx = x - (li + 0.5) * cx
+            dy = y - (lj + 0.5) * cy
+            dx -= grid.lx * np.round(dx / grid.lx)
+            dy -= grid.ly * np.round(dy / grid.ly)
+            d2 = dx * dx + dy * dy
+            keep = d2 < reach * reach
+            lines.append((li * ny + lj)[keep])
+            d2s.append(d2[keep])
+            zs.append(z[keep])
+            ids.append(index[keep])
+    line = np.concatenate(lines)
+    d2 = np.concatenate(d2s)
+    zp = np.concatenate(zs)
+    if 2 * ri + 1 > nx or 2 * rj + 1 > ny:
+        # A box only a few cells across reaches a line twice through the wrap: each pair once.
+        _, first = np.unique(line * len(x) + np.concatenate(ids), return_index=True)
+        line, d2, zp = line[first], d2[first], zp[first]
+    n = nx * ny
+    has = np.bincount(line, minlength=n) > 0
+    top = np.full(n, -np.inf)
+    np.maximum.at(top, line, zp)
 
-            def colour(zz):
-                c = 0.0
-                for d2, z in near:
-                    dz = z - zz
-                    if -reach < dz < reach:
-                        c += volume * cubic_spline(math.sqrt(d2 + dz * dz), h)
-                return c
+    def colour(zz):
+        dz = zz[line] - zp
+        w = np.where(np.abs(dz) < reach, volume * cubic_spline(np.sqrt(d2 + dz * dz) / h, h), 0.0)
+        return np.bincount(line, weights=w, minlength=n)
 
-            hi = max(z for _, z in near) + reach
-            lo = hi - 0.5 * s
-            while colour(lo) < 0.5 and lo > hi - 60 * s:
-                hi, lo = lo, lo - 0.5 * s
-            for _ in range(8):
-                mid = 0.5 * (lo + hi)
-                if colour(mid) < 0.5:
-                    hi = mid
-                else:
-                    lo = mid
-            out[i][j] = 0.5 * (lo + hi)
+    hi = np.where(has, top + reach, 0.0)
+    lo = hi - 0.5 * s
+    # Down in steps of s / 2 to the first level inside the fluid; a line whose particles never
+    # make the colour 0.5 (a stray droplet) within 60 s is a gap.
+    floor = hi - 60 * s
+    while True:
+        step = has & (colour(lo) < 0.5) & (lo > floor)
+        if not step.any():
+            break
+        hi = np.where(step, lo, hi)
+        lo = np.where(step, lo - 0.5 * s, lo)
+    has &= lo > floor
+    for _ in range(8):
+        mid = 0.5 * (lo + hi)
+        below = colour(mid) < 0.5
+        hi = np.where(below, mid, hi)
+        lo = np.where(below, lo, mid)
+    out = np.where(has, 0.5 * (lo + hi), np.nan).reshape(nx, ny)
     # A line with no fluid under it (a gap between towers) takes its neighbours' mean.
-    for i in range(grid.nx):
-        for j in range(grid.ny):
-            if math.isnan(out[i][j]):
-                v = [out[(i + a) % grid.nx][(j + b) % grid.ny] for a in (-1, 0, 1) for b in (-1, 0, 1)]
-                v = [x for x in v if not math.isnan(x)]
-                out[i][j] = sum(v) / len(v) if v else 0.0
-    return out
+    gaps = np.argwhere(np.isnan(out))
+    filled = out.copy()
+    for i, j in gaps:
+        v = [out[(i + a) % nx, (j + b) % ny] for a in (-1, 0, 1) for b in (-1, 0, 1)]
+        v = [w for w in v if not math.isnan(w)]
+        filled[i, j] = sum(v) / len(v) if v else 0.0
+    return filled
 
 
-def dft(field, nx, ny):
-    """Box modes F[m][n] (m in 0..nx-1, n in 0..ny-1) of a periodic nx x ny field."""
-    rows = [[sum(field[i][j] * cmath.exp(-2j * math.pi * m * i / nx) for i in range(nx)) for j in range(ny)]
-            for m in range(nx)]
-    return [[sum(rows[m][j] * cmath.exp(-2j * math.pi * n * j / ny) for j in range(ny)) for n in range(ny)]
-            for m in range(nx)]
-
-
-def signed(m, n):
-    return m - n if m > n // 2 else m
+def mode_numbers(nx, ny):
+    """Signed box mode numbers (m, n) of an nx x ny DFT, as arrays of its shape."""
+    m = np.arange(nx)
+    n = np.arange(ny)
+    sm = np.where(m > nx // 2, m - nx, m)
+    sn = np.where(n > ny // 2, n - ny, n)
+    return np.meshgrid(sm, sn, indexing="ij")
 
 
 def fundamental(field, lx, ly):
-    """(mean, fundamental field, its wavelength [m]) of a periodic field. The fundamental is
-    the band of box modes with wavenumbers within 0.75-1.3 of a centre k0, k0 the box mode's
-    wavenumber whose band holds the most power (the most favourable band: a few irregular
-    peaks in a small box spread their power over several modes near the pattern's wavenumber);
-    its wavelength is the band's power-weighted mean."""
-    nx, ny = len(field), len(field[0])
-    F = dft(field, nx, ny)
-    modes = [(math.hypot(signed(m, nx) / lx, signed(n, ny) / ly), abs(F[m][n]) ** 2, m, n)
-             for m in range(nx) for n in range(ny) if m or n]
-    best = None
+    """(mean, fundamental field, its wavelength [m], and the variance below, in and above the
+    band) of a periodic field. The fundamental is the band of box modes with wavenumbers within
+    0.75-1.3 of a centre k0, k0 the box mode's wavenumber whose band holds the most power (the
+    most favourable band: a few irregular peaks in a small box spread their power over several
+    modes near the pattern's wavenumber); its wavelength is the band's power-weighted mean."""
+    field = np.asarray(field, dtype=float)
+    nx, ny = field.shape
+    F = np.fft.fft2(field)
+    sm, sn = mode_numbers(nx, ny)
+    k = np.hypot(sm / lx, sn / ly)
+    power = np.abs(F) ** 2
+    nonzero = k > 0
+    kk, pp = k[nonzero], power[nonzero]
+    order = np.argsort(kk, kind="stable")
+    ks, cum = kk[order], np.concatenate(([0.0], np.cumsum(pp[order])))
     # Band centres: modes of at least two wavelengths across the box in x or y (the box-scale
     # modes (1, 0), (1, 1) are the unequal heights of a few peaks, not a pattern's wavelength).
-    centres = set(round(k, 6) for k, _, m, n in modes if max(abs(signed(m, nx)), abs(signed(n, ny))) >= 2)
-    for k0 in sorted(centres):
-        power = sum(p for k, p, _, _ in modes if 0.75 * k0 <= k <= 1.3 * k0)
-        if best is None or power > best[0]:
-            best = (power, k0)
-    k0 = best[1]
-    shell = [(k, p, m, n) for k, p, m, n in modes if 0.75 * k0 <= k <= 1.3 * k0]
-    kmean = sum(k * p for k, p, _, _ in shell) / max(sum(p for _, p, _, _ in shell), 1e-300)
-    mean = F[0][0].real / (nx * ny)
-    fund = [[mean + sum((F[m][n] * cmath.exp(2j * math.pi * (m * i / nx + n * j / ny))).real for _, _, m, n in shell)
-             / (nx * ny) for j in range(ny)] for i in range(nx)]
+    wide = nonzero & (np.maximum(np.abs(sm), np.abs(sn)) >= 2)
+    centres = np.unique(np.round(k[wide], 6))
+    band_power = (cum[np.searchsorted(ks, 1.3 * centres, side="right")] -
+                  cum[np.searchsorted(ks, 0.75 * centres, side="left")])
+    k0 = centres[int(np.argmax(band_power))]
+    shell = nonzero & (k >= 0.75 * k0) & (k <= 1.3 * k0)
+    kmean = float((k[shell] * power[shell]).sum() / max(power[shell].sum(), 1e-300))
+    mean = F[0, 0].real / (nx * ny)
+    fund = mean + np.fft.ifft2(np.where(shell, F, 0.0)).real
     # The variance below and above the band (Parseval: power / (nx ny)^2 per mode).
     scale = 1.0 / (nx * ny) ** 2
-    below = scale * sum(p for k, p, _, _ in modes if k < 0.75 * k0)
-    above = scale * sum(p for k, p, _, _ in modes if k > 1.3 * k0)
-    band = scale * sum(p for _, p, _, _ in shell)
+    below = scale * power[nonzero & (k < 0.75 * k0)].sum()
+    above = scale * power[k > 1.3 * k0].sum()
+    band = scale * power[shell].sum()
     return mean, fund, 1.0 / kmean if kmean > 0 else float("nan"), below, band, above
 
 
 def measures(field, lx, ly):
-    nx, ny = len(field), len(field[0])
+    field = np.asarray(field, dtype=float)
     mean, fund, lam, below, band, above = fundamental(field, lx, ly)
-    values = [v for row in field for v in row]
-    ptp = max(values) - min(values)
-    dev = [field[i][j] - fund[i][j] for i in range(nx) for j in range(ny)]
-    var = sum((v - mean) ** 2 for v in values) / len(values)
+    ptp = float(field.max() - field.min())
+    dev = field - fund
+    var = float(((field - mean) ** 2).mean())
     return {
         "ptp": ptp,
         "lambda": lam,
-        "dev_max": max(abs(d) for d in dev) / ptp,
-        "dev_rms": math.sqrt(sum(d * d for d in dev) / len(dev)) / ptp,
+        "dev_max": float(np.abs(dev).max()) / ptp,
+        "dev_rms": math.sqrt(float((dev * dev).mean())) / ptp,
         "below": below / var if var > 0 else 0.0,
         "above": above / var if var > 0 else 0.0,
         "band_rms": math.sqrt(band),
@@ -249,25 +274,86 @@ def sharpened(F, p):
     return 4.5 * t ** p - 1.5
 
 
+def bessel_j0(x):
+    """J0(x) = (1/pi) int_0^pi cos(x sin t) dt (Simpson, 200 intervals: 1e-9 for x < 10)."""
+    n = 200
+    t = np.linspace(0.0, math.pi, n + 1)
+    w = np.ones(n + 1)
+    w[1:-1:2], w[2:-1:2] = 4.0, 2.0
+    x = np.asarray(x, dtype=float)
+    return (np.cos(np.multiply.outer(x, np.sin(t))) * w).sum(axis=-1) * (math.pi / n) / 3.0 / math.pi
+
+
+def mean_spike(field, lx, ly, lam):
+    """One spike's profile, averaged over the peaks: around each local maximum (the highest point
+    within 0.3 lambda, above the mean by a quarter of the highest peak's height) the surface's
+    azimuthal mean out to 0.6 lambda, in rings one cell wide, minus the field's mean, over the
+    peak's height above it. Returns (r / lambda per ring, the mean profile, peaks). The
+    fundamental's own profile about a tip is J0(2 pi r / lambda) for hexagons and squares alike
+    (every wave vector has length 2 pi / lambda): the reference."""
+    field = np.asarray(field, dtype=float)
+    nx, ny = field.shape
+    cx, cy = lx / nx, ly / ny
+    mean = field.mean()
+    top = field.max()
+    w = max(1, int(round(0.3 * lam / max(cx, cy))))
+    local = field.copy()
+    for a in range(-w, w + 1):
+        for b in range(-w, w + 1):
+            if a * a * cx * cx + b * b * cy * cy <= (0.3 * lam) ** 2:
+                local = np.maximum(local, np.roll(np.roll(field, a, axis=0), b, axis=1))
+    peaks = np.argwhere((field >= local) & (field > mean + 0.25 * (top - mean)))
+    R = 0.6 * lam
+    ri, rj = int(math.ceil(R / cx)), int(math.ceil(R / cy))
+    di, dj = np.meshgrid(np.arange(-ri, ri + 1), np.arange(-rj, rj + 1), indexing="ij")
+    r = np.hypot(di * cx, dj * cy)
+    ring = np.floor(r / min(cx, cy) + 0.5).astype(int)
+    inside = r <= R
+    di, dj, r, ring = di[inside], dj[inside], r[inside], ring[inside]
+    rings = ring.max() + 1
+    count = np.bincount(ring, minlength=rings)
+    r_mean = np.bincount(ring, weights=r, minlength=rings) / np.maximum(count, 1)
+    total = np.zeros(rings)
+    for i, j in peaks:
+        h0 = field[i, j] - mean
+        if not h0 > 0:
+            continue
+        v = field[(i + di) % nx, (j + dj) % ny] - mean
+        total += np.bincount(ring, weights=v, minlength=rings) / np.maximum(count, 1) / h0
+    return r_mean / lam, total / max(len(peaks), 1), len(peaks)
+
+
+def shape_deviation(rl, profile):
+    """The largest |profile - J0(2 pi r / lambda)| out to half a wavelength."""
+    near = rl <= 0.5
+    return float(np.abs(profile[near] - bessel_j0(2 * math.pi * rl[near])).max())
+
+
 def procedural(ps):
-    """Ferro's hexagonal spikes on one periodic cell: tip spacing l = 1 along x, sqrt(3) along y
-    (two tips per cell: (0, 0) and (1/2, sqrt(3)/2))."""
-    nx, ny = 24, 42
-    lx, ly = 1.0, math.sqrt(3.0)
-    print("p  dev_max  dev_rms  above")
+    """Ferro's hexagonal spikes: the Fourier measures on one periodic cell (tip spacing l = 1
+    along x, sqrt(3) along y: two tips per cell, (0, 0) and (1/2, sqrt(3)/2)), and the mean
+    spike's departure from J0 on 4 x 4 such cells (lambda = sqrt(3) / 2 l)."""
+    def field(cells, nx, ny, p, centred):
+        lx, ly = float(cells), cells * math.sqrt(3.0)
+        i, j = np.meshgrid(np.arange(nx), np.arange(ny), indexing="ij")
+        x, y = (i + 0.5) * lx / nx, (j + 0.5) * ly / ny
+        # lattice coordinates: x = a + b/2, y = b sqrt(3)/2; `centred` puts a tip on a cell
+        # centre (the mean spike starts from a grid cell).
+        x0, y0 = (0.5 * lx / nx, 0.5 * ly / ny) if centred else (0.0, 0.0)
+        b = (y - y0) / (math.sqrt(3.0) / 2)
+        a = (x - x0) - b / 2
+        F = np.cos(2 * math.pi * (a + b)) + np.cos(2 * math.pi * a) + np.cos(2 * math.pi * b)
+        if p != 1.0:
+            F = 4.5 * np.clip((F + 1.5) / 4.5, 0.0, 1.0) ** p - 1.5
+        return F, lx, ly
+
+    print("p  dev_max  dev_rms  above  shape_dev")
     for p in ps:
-        field = []
-        for i in range(nx):
-            row = []
-            for j in range(ny):
-                x, y = (i + 0.5) * lx / nx, (j + 0.5) * ly / ny
-                # lattice coordinates: x = a + b/2, y = b sqrt(3)/2
-                b = y / (math.sqrt(3.0) / 2)
-                a = x - b / 2
-                row.append(sharpened(hex_profile(a, b), p))
-            field.append(row)
-        r = measures(field, lx, ly)
-        print("%g  %.3f  %.3f  %.3f" % (p, r["dev_max"], r["dev_rms"], r["above"]))
+        F, lx, ly = field(1, 24, 42, p, False)
+        r = measures(F, lx, ly)
+        F4, lx4, ly4 = field(4, 160, 277, p, True)
+        rl, prof, _ = mean_spike(F4, lx4, ly4, math.sqrt(3.0) / 2)
+        print("%g  %.3f  %.3f  %.3f  %.3f" % (p, r["dev_max"], r["dev_rms"], r["above"], shape_deviation(rl, prof)))
 
 
 def main():
@@ -277,6 +363,7 @@ def main():
     ap.add_argument("--window", action="append", default=[], help="LABEL:T0:T1 [s], repeatable")
     ap.add_argument("--cell", type=float, default=0.0, help="grid cell [m]; 0 = half the spacing")
     ap.add_argument("--profile-csv", help="write each window's spike profile here")
+    ap.add_argument("--spike-csv", help="write each window's mean spike (r / lambda, profile, J0) here")
     ap.add_argument("--procedural", help="sharpness exponents p, comma-separated")
     a = ap.parse_args()
     if a.procedural:
@@ -314,8 +401,9 @@ def main():
             if line.startswith("comment time "):
                 times[path] = float(line.split()[2])
                 break
-    print("label  frames  ptp_mm  lambda_mm  dev_max  dev_rms  below  above  band_mm  move")
-    cuts = []
+    print("label  frames  ptp_mm  lambda_mm  dev_max  dev_rms  below  above  band_mm  move  shape_dev  peaks")
+    cuts, spikes = [], []
+    grid_rl = np.linspace(0.0, 0.6, 31)   # r / lambda of the window's mean spike
     for label, t0, t1 in windows:
         chosen = [p for p in files if t0 - 1e-6 <= times.get(p, -1) <= t1 + 1e-6]
         if not chosen:
@@ -329,22 +417,38 @@ def main():
             grid = Grid(lx, ly, a.cell if a.cell > 0 else 0.5 * s)
             fields.append(surface_heights(pts, grid, s))
             rows.append(measures(fields[-1], lx, ly))
-        nx, ny = grid.nx, grid.ny
         # How far the surface moves between frames, against its height (a standing pattern: the
         # column jitter only; a pattern whose peaks wander: of order 1).
-        moves = [math.sqrt(sum((g[i][j] - f[i][j]) ** 2 for i in range(nx) for j in range(ny)) / (nx * ny)) / r["ptp"]
-                 for f, g, r in zip(fields, fields[1:], rows[1:])]
+        moves = [math.sqrt(float(((g - f) ** 2).mean())) / r["ptp"] for f, g, r in zip(fields, fields[1:], rows[1:])]
         lams = sorted(r["lambda"] for r in rows)
 
         def mean(key):
             return sum(r[key] for r in rows) / len(rows)
 
-        print("%s  %d  %.2f  %.2f  %.3f  %.3f  %.3f  %.3f  %.4f  %s" % (
+        # The mean spike: each frame's (in its own r / lambda), averaged over the frames.
+        profiles, peaks = [], 0
+        for f, r in zip(fields, rows):
+            rl, prof, n = mean_spike(f, lx, ly, r["lambda"])
+            if n:
+                profiles.append(np.interp(grid_rl, rl, prof))
+                peaks += n
+        spike = np.mean(profiles, axis=0) if profiles else None
+        if spike is not None:
+            spikes.append((label, spike))
+        print("%s  %d  %.2f  %.2f  %.3f  %.3f  %.3f  %.3f  %.4f  %s  %s  %d" % (
             label, len(chosen), 1e3 * mean("ptp"), 1e3 * lams[len(lams) // 2], mean("dev_max"), mean("dev_rms"),
-            mean("below"), mean("above"), 1e3 * mean("band_rms"), "%.3f" % (sum(moves) / len(moves)) if moves else "nan"))
+            mean("below"), mean("above"), 1e3 * mean("band_rms"), "%.3f" % (sum(moves) / len(moves)) if moves else "nan",
+            "%.3f" % shape_deviation(grid_rl, spike) if spike is not None else "nan", peaks))
         sys.stdout.flush()
         for t, v, f in profile_cut(fields[-1], rows[-1]["fund"], grid):
             cuts.append((label, t, v, f))
+    if a.spike_csv:
+        with open(a.spike_csv, "w") as out:
+            out.write("label,r_over_lambda,mean_spike,j0\n")
+            j0 = bessel_j0(2 * math.pi * grid_rl)
+            for label, spike in spikes:
+                for x, v, b in zip(grid_rl, spike, j0):
+                    out.write("%s,%.3f,%.4f,%.4f\n" % (label, x, v, b))
     if a.profile_csv:
         with open(a.profile_csv, "w") as out:
             out.write("label,distance_mm,surface_mm,fundamental_mm\n")
