@@ -8,7 +8,9 @@
 # The frame is simulated once (WORK_DIR/base); each variant is a copy of that shot run again
 # with its --set, so only the spikes, the export and the render are made again (shot.sh's
 # stamps). The PNGs go to docs/media/look/spikes_NAME.png. SPIKE_LOOK_ONLY="NAME ..." makes
-# only those variants (the base frame is made too, if WORK_DIR lacks it).
+# only those variants (the base frame is made too, if WORK_DIR lacks it). With gnuplot and NumPy
+# it also draws spikes_squareness_plan.png, the planforms from above (scripts/docs/spike_plan.py;
+# SPIKE_LOOK_ONLY=plan draws it alone from the variants WORK_DIR holds).
 # Exit codes: 2 bad arguments, 3 a stage failed.
 set -euo pipefail
 root="$(cd "$(dirname "$0")/../.." && pwd)"
@@ -43,6 +45,8 @@ variants=(
   "defects_0.35 spikes.defects=0.35"
   "square spikes.pattern=square"
   "square_sharp spikes.pattern=square spikes.sharpness=3.0"
+  "squareness_0.35 spikes.squareness=0.35"
+  "squareness_0.7 spikes.squareness=0.7"
   "spacing_physical spikes.spacing=physical"
   "spacing_growth spikes.spacing=growth"
 )
@@ -57,4 +61,32 @@ for v in "${variants[@]}"; do
   run "$work/$name" "${sets[@]}"
   cp "$work/$name/png/frame_0001.png" "$media/spikes_$name.png"
 done
+# The planform seen from above (a perspective render hides it behind the spikes' lean): the
+# spiky meshes of the squareness variants as height maps, 56 mm around the magnet's foot.
+plan=(base squareness_0.35 squareness_0.7 square)
+if command -v gnuplot > /dev/null && [[ -z "$only" || " $only " == *" squareness_0.7 "* || " $only " == *" plan "* ]]; then
+  panels=""
+  for name in "${plan[@]}"; do
+    mesh="$work/$name/spiky/spiky_0001.ply"
+    [[ -f "$mesh" ]] || { echo "spike-look.sh: no $mesh: no plan view" >&2; panels=""; break; }
+    python3 "$root/scripts/docs/spike_plan.py" "$mesh" "$work/plan_$name.dat" --centre=-0.02,0 --half 0.028 || exit 3
+    case "$name" in
+      base) title="squareness 0 (the default)" ;;
+      square) title="squareness 1 (pattern = square)" ;;
+      *) title="squareness ${name#squareness_}" ;;
+    esac
+    panels+="set title '$title'; plot '$work/plan_$name.dat' matrix with image; "
+  done
+  if [[ -n "$panels" ]]; then
+    gnuplot <<PLOT || { echo "spike-look.sh: gnuplot failed" >&2; exit 3; }
+set terminal pngcairo size 1200,330
+set output '$media/spikes_squareness_plan.png'
+set multiplot layout 1,4
+unset key; unset colorbox; unset xtics; unset ytics; set size ratio -1
+set palette grey; set cbrange [7:15]
+$panels
+unset multiplot
+PLOT
+  fi
+fi
 echo "spike-look.sh: wrote $media/spikes_*.png" >&2
