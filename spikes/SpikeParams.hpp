@@ -51,9 +51,15 @@ struct SpikeParams {
             if (magnet == m) return l;
         return lattice;
     }
-    /// How far magnet m's lattice has morphed from hexagons (0) to squares (1): `squareness`
-    /// on a hexagon planform, 1 on a square one (a magnet's [[spikes.magnets]] pattern wins).
-    double squarenessOf(int m) const { return latticeOf(m) == Lattice::Square ? 1.0 : squareness; }
+    /// How far magnet m's lattice has morphed from hexagons (0) to squares (1): a magnet's own
+    /// [[spikes.magnets]] pattern pins it (0 or 1); otherwise `squareness`, or 1 where [spikes]
+    /// sets pattern = "square".
+    double squarenessOf(int m) const
+    {
+        for (const auto& [magnet, l] : magnetLattice)
+            if (magnet == m) return l == Lattice::Square ? 1.0 : 0.0;
+        return lattice == Lattice::Square ? 1.0 : squareness;
+    }
     /// The tips are traced in rows (traceLattice) for every frame of a shot whose hexagons
     /// morph: `squareness` above 0 in [spikes] or any key. Then the tips a frame lays out do
     /// not switch between the ring trace (the paper's hexagons) and the rows mid-shot.

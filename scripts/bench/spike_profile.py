@@ -47,7 +47,7 @@ Needs NumPy (python3-numpy; scripts/install-deps.sh --with-bench).
 
 --procedural: dev_max, dev_rms, above and shape_dev on Ferro's hexagonal profile (spikes/SpikePhysics.hpp:
 hexProfile sharpened by sharpenedProfile with exponent p) sampled on one periodic cell of the
-lattice (tip spacing l by sqrt(3) l).
+lattice (tip spacing l by sqrt(3) l); shape_dev on 4 x 4 cells (--spike-csv: their mean spikes).
 """
 import argparse
 import cmath
@@ -329,7 +329,7 @@ def shape_deviation(rl, profile):
     return float(np.abs(profile[near] - bessel_j0(2 * math.pi * rl[near])).max())
 
 
-def procedural(ps):
+def procedural(ps, spike_csv=None):
     """Ferro's hexagonal spikes: the Fourier measures on one periodic cell (tip spacing l = 1
     along x, sqrt(3) along y: two tips per cell, (0, 0) and (1/2, sqrt(3)/2)), and the mean
     spike's departure from J0 on 4 x 4 such cells (lambda = sqrt(3) / 2 l)."""
@@ -348,12 +348,27 @@ def procedural(ps):
         return F, lx, ly
 
     print("p  dev_max  dev_rms  above  shape_dev")
+    curves = []
+    grid_rl = np.linspace(0.0, 0.6, 31)
     for p in ps:
         F, lx, ly = field(1, 24, 42, p, False)
         r = measures(F, lx, ly)
         F4, lx4, ly4 = field(4, 160, 277, p, True)
         rl, prof, _ = mean_spike(F4, lx4, ly4, math.sqrt(3.0) / 2)
+        curves.append(("p%g" % p, np.interp(grid_rl, rl, prof)))
         print("%g  %.3f  %.3f  %.3f  %.3f" % (p, r["dev_max"], r["dev_rms"], r["above"], shape_deviation(rl, prof)))
+    if spike_csv:
+        write_spikes(spike_csv, grid_rl, curves)
+
+
+def write_spikes(path, grid_rl, spikes):
+    """label,r_over_lambda,mean_spike,j0 rows of each (label, profile on grid_rl)."""
+    j0 = bessel_j0(2 * math.pi * grid_rl)
+    with open(path, "w") as out:
+        out.write("label,r_over_lambda,mean_spike,j0\n")
+        for label, spike in spikes:
+            for x, v, b in zip(grid_rl, spike, j0):
+                out.write("%s,%.3f,%.4f,%.4f\n" % (label, x, v, b))
 
 
 def main():
@@ -373,7 +388,7 @@ def main():
             sys.exit("spike_profile.py: --procedural takes numbers >= 1, comma-separated (got %r)" % a.procedural)
         if any(not p >= 1 for p in ps):
             sys.exit("spike_profile.py: --procedural takes numbers >= 1")
-        procedural(ps)
+        procedural(ps, a.spike_csv)
         return
     if not a.frames or not a.period or not a.window:
         sys.exit("spike_profile.py: give FRAMES_DIR, --period LX,LY and at least one --window LABEL:T0:T1")
@@ -443,12 +458,7 @@ def main():
         for t, v, f in profile_cut(fields[-1], rows[-1]["fund"], grid):
             cuts.append((label, t, v, f))
     if a.spike_csv:
-        with open(a.spike_csv, "w") as out:
-            out.write("label,r_over_lambda,mean_spike,j0\n")
-            j0 = bessel_j0(2 * math.pi * grid_rl)
-            for label, spike in spikes:
-                for x, v, b in zip(grid_rl, spike, j0):
-                    out.write("%s,%.3f,%.4f,%.4f\n" % (label, x, v, b))
+        write_spikes(a.spike_csv, grid_rl, spikes)
     if a.profile_csv:
         with open(a.profile_csv, "w") as out:
             out.write("label,distance_mm,surface_mm,fundamental_mm\n")

@@ -924,6 +924,13 @@ TEST_CASE("[[spikes.magnets]] gives one magnet its own planform and the other ke
     }
     REQUIRE(ring == 4);
     requireHealthy(res);
+    // A magnet's own pattern pins it while the others morph with `squareness`.
+    const SpikeScene morph = scene(
+        dishScene(R, magnets + "[spikes]\nsquareness = 0.5\n[[spikes.magnets]]\nmagnet = 1\npattern = \"hexagon\"\n"));
+    const SpikeResult morphed = addSpikes(frameInput(morph, makeFlatPool(R, kDepth, 30)), morph.params);
+    REQUIRE(morphed.patterns.size() == 2);
+    for (const SpikePattern& p : morphed.patterns) REQUIRE(p.squareness == (p.magnet == 0 ? 0.5 : 0.0));
+    requireHealthy(morphed);
     REQUIRE_THROWS_AS(scene(dishScene(R, magnets + "[spikes]\n[[spikes.magnets]]\nmagnet = 2\npattern = \"square\"\n")),
                       SceneError);
     REQUIRE_THROWS_AS(scene(dishScene(R, magnets + "[spikes]\n[[spikes.magnets]]\npattern = \"square\"\n")),
