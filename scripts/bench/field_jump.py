@@ -23,8 +23,12 @@ simulator's step uses (the scene's plus sim.artificial_viscosity x 2 spacings x 
 depth), sim/sph/FluidSimulation.cpp), a prediction; and nu_fit, the one whose fastest rate
 equals the simulated rate (SPH has numerical viscosity beyond nu_eff). The fluid comes from
 SCENE.toml.
+With --spectrum (spike_profile.py --spectrum-csv of the same frames) also the simulated
+dispersion relation: every wavelength's growth rate over the exponential phase, and the
+wavelength where it peaks (--dispersion-csv writes it beside the theory's rates).
 One CSV row: spacing_mm, ratio, M/M_c, frames, rate_sim, lambda_sim_mm, lambda_late_mm,
-rate_nu, lambda_nu_mm, nu_eff, rate_eff, lambda_eff_mm, nu_fit, lambda_fit_mm.
+rate_nu, lambda_nu_mm, nu_eff, rate_eff, lambda_eff_mm, nu_fit, lambda_fit_mm, lambda_disp_mm
+(nan without --spectrum).
 """
 import argparse
 import math
@@ -129,6 +133,8 @@ def main():
     ap.add_argument("--ratio", type=float, required=True)
     ap.add_argument("--spacing", type=float, required=True)
     ap.add_argument("--g", type=float, default=9.81)
+    ap.add_argument("--spectrum", help="spike_profile.py --spectrum-csv of the same frames: the growth rate of every wavelength")
+    ap.add_argument("--dispersion-csv", help="with --spectrum: write the simulated and theoretical growth rates here")
     a = ap.parse_args()
     rho, sigma, nu, chi, ms, depth, alpha = scene_fluid(a.scene)
     if not (rho > 0 and sigma > 0 and chi > 0 and ms > 0):
@@ -184,9 +190,68 @@ def main():
             lo, hi = (mid, hi) if fastest(q, rho, a.g, sigma, math.exp(mid))[1] > s_sim else (lo, mid)
         nu_fit = math.exp(0.5 * (lo + hi))
     lam_fit = 2e3 * math.pi / fastest(q, rho, a.g, sigma, nu_fit)[0] if nu_fit == nu_fit else float("nan")
-    print("%g,%g,%.3f,%d,%.1f,%.2f,%.2f,%.1f,%.2f,%.2g,%.1f,%.2f,%.2g,%.2f" % (
+    lam_disp = float("nan")
+    if a.spectrum:
+        lam_disp = dispersion(a, grow, q, rho, sigma, nu, nu_eff)
+    print("%g,%g,%.3f,%d,%.1f,%.2f,%.2f,%.1f,%.2f,%.2g,%.1f,%.2f,%.2g,%.2f,%.2f" % (
         a.spacing * 1e3, a.ratio, math.sqrt(q), n, s_sim, lam_sim, lam_late, s_th, 2e3 * math.pi / k_th,
-        nu_eff, s_eff, 2e3 * math.pi / k_eff, nu_fit, lam_fit))
+        nu_eff, s_eff, 2e3 * math.pi / k_eff, nu_fit, lam_fit, lam_disp))
+
+
+def dispersion(a, grow, q, rho, sigma, nu, nu_eff):
+    """The simulated dispersion relation: per ring of the radial spectrum (spike_profile.py
+    --spectrum-csv, one row per frame and ring), the least-squares slope of ln(amplitude)
+    against t over the exponential phase's frames; the wavelength [mm] where it peaks (a
+    parabola through the fastest ring and its neighbours, in k), among the rings of at least
+    4 mm (shorter ones are few particles across). With --dispersion-csv: wavelength_mm,
+    rate_sim, rate_nu, rate_eff per ring."""
+    times = {round(r[0], 5) for r in grow}
+    rings = {}   # ring index -> [(t, wavelength_mm, amplitude)]
+    counter = {}
+    try:
+        with open(a.spectrum) as f:
+            next(f)
+            for line in f:
+                label, lam, amp = line.strip().split(",")
+                t = float(label[1:])
+                i = counter.get(label, 0)
+                counter[label] = i + 1
+                if round(t, 5) in times and float(amp) > 0:
+                    rings.setdefault(i, []).append((t, float(lam), float(amp)))
+    except (OSError, ValueError, StopIteration) as e:
+        sys.exit("field_jump.py: %s: %s" % (a.spectrum, e))
+    table = []
+    for i in sorted(rings):
+        pts = rings[i]
+        if len(pts) < 3:
+            continue
+        n = len(pts)
+        tm = sum(p[0] for p in pts) / n
+        ym = sum(math.log(p[2]) for p in pts) / n
+        slope = sum((p[0] - tm) * (math.log(p[2]) - ym) for p in pts) / sum((p[0] - tm) ** 2 for p in pts)
+        lam = sum(p[1] for p in pts) / n
+        k = 2e3 * math.pi / lam
+        table.append((lam, slope, rate(k, q, rho, a.g, sigma, nu), rate(k, q, rho, a.g, sigma, nu_eff)))
+    if a.dispersion_csv:
+        with open(a.dispersion_csv, "w") as out:
+            out.write("wavelength_mm,rate_sim_per_s,rate_nu_per_s,rate_eff_per_s\n")
+            for row in table:
+                out.write("%.3f,%.2f,%.2f,%.2f\n" % row)
+    usable = [j for j, row in enumerate(table) if row[0] >= 4.0]
+    if not usable:
+        return float("nan")
+    j = max(usable, key=lambda j: table[j][1])
+    if 0 < j < len(table) - 1 and j - 1 in usable:
+        (l0, s0, _, _), (l1, s1, _, _), (l2, s2, _, _) = table[j - 1], table[j], table[j + 1]
+        k0, k1, k2 = 1 / l0, 1 / l1, 1 / l2
+        den = (k0 - k1) * (k0 - k2) * (k1 - k2)
+        A = (k2 * (s1 - s0) + k1 * (s0 - s2) + k0 * (s2 - s1)) / den
+        B = (k2 * k2 * (s0 - s1) + k1 * k1 * (s2 - s0) + k0 * k0 * (s1 - s2)) / den
+        if A < 0:
+            kp = -B / (2 * A)
+            if min(k0, k2) <= kp <= max(k0, k2):
+                return 1 / kp
+    return table[j][0]
 
 
 if __name__ == "__main__":

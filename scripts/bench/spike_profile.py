@@ -39,7 +39,9 @@ an averaged surface) and the window prints the frames' means:
               to half a wavelength. Peaks of unequal height do not enter it (each is scaled by
               its own height), so it measures shape, not disorder
   peaks       the peaks averaged (all frames)
---spike-csv writes each window's mean spike against J0. --profile-csv writes one spike's profile per window, from its last frame: a cut from the
+--spike-csv writes each window's mean spike against J0. --spectrum-csv writes the radial spectrum
+of each window's last frame (rings of box modes 1 / L wide: wavelength, RMS amplitude), from
+which field_jump.py --spectrum measures the growth rate of every wavelength. --profile-csv writes one spike's profile per window, from its last frame: a cut from the
 highest point through the nearest other peak, the surface and its fundamental against the
 distance.
 
@@ -323,6 +325,27 @@ def mean_spike(field, lx, ly, lam):
     return r_mean / lam, total / max(len(peaks), 1), len(peaks)
 
 
+def radial_spectrum(field, lx, ly):
+    """The surface's RMS amplitude [m] in rings of box modes one 1 / max(lx, ly) wide in the
+    spatial frequency |k| / 2 pi (the mean left out): [(wavelength [m] at the ring's mean
+    frequency, amplitude)], out to the grid's Nyquist frequency."""
+    field = np.asarray(field, dtype=float)
+    nx, ny = field.shape
+    F = np.fft.fft2(field)
+    sm, sn = mode_numbers(nx, ny)
+    f = np.hypot(sm / lx, sn / ly)
+    df = 1.0 / max(lx, ly)
+    ring = np.floor(f / df + 0.5).astype(int)
+    power = np.abs(F) ** 2 / (nx * ny) ** 2
+    top = int(min(nx / (2 * lx), ny / (2 * ly)) / df)
+    out = []
+    for r in range(1, top + 1):
+        sel = ring == r
+        if sel.any():
+            out.append((1.0 / f[sel].mean(), math.sqrt(power[sel].sum())))
+    return out
+
+
 def shape_deviation(rl, profile):
     """The largest |profile - J0(2 pi r / lambda)| out to half a wavelength."""
     near = rl <= 0.5
@@ -379,6 +402,7 @@ def main():
     ap.add_argument("--cell", type=float, default=0.0, help="grid cell [m]; 0 = half the spacing")
     ap.add_argument("--profile-csv", help="write each window's spike profile here")
     ap.add_argument("--spike-csv", help="write each window's mean spike (r / lambda, profile, J0) here")
+    ap.add_argument("--spectrum-csv", help="write each window's last frame's radial spectrum here")
     ap.add_argument("--procedural", help="sharpness exponents p, comma-separated")
     a = ap.parse_args()
     if a.procedural:
@@ -417,7 +441,7 @@ def main():
                 times[path] = float(line.split()[2])
                 break
     print("label  frames  ptp_mm  lambda_mm  dev_max  dev_rms  below  above  band_mm  move  shape_dev  peaks")
-    cuts, spikes = [], []
+    cuts, spikes, spectra = [], [], []
     grid_rl = np.linspace(0.0, 0.6, 31)   # r / lambda of the window's mean spike
     for label, t0, t1 in windows:
         chosen = [p for p in files if t0 - 1e-6 <= times.get(p, -1) <= t1 + 1e-6]
@@ -455,10 +479,17 @@ def main():
             mean("below"), mean("above"), 1e3 * mean("band_rms"), "%.3f" % (sum(moves) / len(moves)) if moves else "nan",
             "%.3f" % shape_deviation(grid_rl, spike) if spike is not None else "nan", peaks))
         sys.stdout.flush()
+        if a.spectrum_csv:
+            spectra += [(label, lam, amp) for lam, amp in radial_spectrum(fields[-1], lx, ly)]
         for t, v, f in profile_cut(fields[-1], rows[-1]["fund"], grid):
             cuts.append((label, t, v, f))
     if a.spike_csv:
         write_spikes(a.spike_csv, grid_rl, spikes)
+    if a.spectrum_csv:
+        with open(a.spectrum_csv, "w") as out:
+            out.write("label,wavelength_mm,amplitude_mm\n")
+            for label, lam, amp in spectra:
+                out.write("%s,%.4f,%.6g\n" % (label, 1e3 * lam, 1e3 * amp))
     if a.profile_csv:
         with open(a.profile_csv, "w") as out:
             out.write("label,distance_mm,surface_mm,fundamental_mm\n")
