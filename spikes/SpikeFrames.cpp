@@ -285,13 +285,15 @@ bool earlierSpikeInput(const SpikeScene& scene, const SpikeInput& in, double int
                 moved = moved || a.position != b.position || a.direction != b.direction || a.strength != b.strength;
             }
     }
-    // A gain or a jitter keyed by [[spikes.keys]] that changed over the interval moves the spikes
-    // too: the tips' amplitude grows, their positions drift, and the spikes carry that as
-    // velocity (tipMotions). Keyed sharpness and defects change the profile, which the velocity
-    // model does not follow: they change the shape without motion blur.
+    // A gain, a jitter or a squareness keyed by [[spikes.keys]] that changed over the interval
+    // moves the spikes too: the tips' amplitude grows, their positions drift or slide to the
+    // morphed lattice, and the spikes carry that as velocity (tipMotions). Keyed sharpness and
+    // defects change the profile, which the velocity model does not follow: they change the
+    // shape without motion blur.
     const SpikeParams lookNow = spikeParamsAt(scene.params, in.time),
                       lookThen = spikeParamsAt(scene.params, in.time - interval);
-    moved = moved || lookNow.heightGain != lookThen.heightGain || lookNow.jitter != lookThen.jitter;
+    moved = moved || lookNow.heightGain != lookThen.heightGain || lookNow.jitter != lookThen.jitter ||
+            lookNow.squareness != lookThen.squareness;
     // Tips carried by the flow (response_time) move with it even under a still field.
     moved = moved || (scene.params.responseTime > 0 && in.flow && in.flow->samples().size() > 1);
     if (!moved) return false;

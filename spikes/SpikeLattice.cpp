@@ -293,63 +293,57 @@ void traceAxes(const TraceFrame& f, int maxRings, LatticeTips& lattice, std::vec
     }
 }
 
-// The tips in rows: the i axis traced both ways from x0, then from each of its tips a row both
-// ways along e2 (90 degrees from e1 on a square, 60 + 30 squareness degrees on a morphing
-// lattice), every line by traceLine. Rings around x0 would be diamonds on a square
-// (|i| + |j| = r between two axes) that miss the corners of a round supercritical region; rows
-// reach every tip the region holds. On an oblique lattice (e2 not at 90 degrees) a point at
-// distance R in the region has |i| up to R / (l sin theta), beyond the axis's last live tip:
-// the axis goes on that far (ignoring the field) and rows start from those tips too, each at
-// most that long. Returns the most tips a line reached.
-int traceRows(const TraceFrame& f, int maxRings, LatticeTips& lattice)
+// One fill of the tips in rows: an axis traced both ways from x0 along `axis` (lattice step
+// (ai, aj)), then from each of its tips up to its last supercritical one a row both ways along
+// `row` (step (ri, rj)), every line by traceLine. Rows do not start from the dead tips that end
+// the axis: a row from there would never meet a live tip, so nothing would end it before the
+// wall. Returns the most tips a line reached.
+int fillRows(const TraceFrame& f, int maxRings, LatticeTips& lattice, const Vec3d& axis, int ai, int aj,
+             const Vec3d& row, int ri, int rj)
 {
-    addTip(lattice, 0, 0, f.x0, f.n0);
-    const Vec3d e2 = f.e2();
-    const double sinTheta = std::max(e2.dot(f.e1perp), 0.5);
-    std::vector<Vec3d> axis[2] = {{f.x0}, {f.x0}};
+    std::vector<Vec3d> line[2] = {{f.x0}, {f.x0}};
     const Vec3d n0 = f.normals.at(f.x0, f.n0);
     const bool live0 = alive(f, f.x0, f.n0);
-    traceLine(f, f.x0, n0, live0, f.e1, 0, 0, 1, 0, maxRings, lattice, &axis[0]);
-    traceLine(f, f.x0, n0, live0, -f.e1, 0, 0, -1, 0, maxRings, lattice, &axis[1]);
-    int most = int(std::max(axis[0].size(), axis[1].size())) - 1;
+    traceLine(f, f.x0, n0, live0, axis, 0, 0, ai, aj, maxRings, lattice, &line[0]);
+    traceLine(f, f.x0, n0, live0, -axis, 0, 0, -ai, -aj, maxRings, lattice, &line[1]);
+    int most = int(std::max(line[0].size(), line[1].size())) - 1;
     for (int side = 0; side < 2; ++side) {
-        const int sign = side == 0 ? 1 : -1;
-        // Rows start from every axis tip up to the axis's last supercritical one (tips before it
-        // may be subcritical: the top of a heap), not from the dead tips that end the axis: a
-        // row from there would never meet a live tip, so nothing would end it before the wall.
-        std::vector<char> live(axis[side].size());
+        // The axis's tips before its last live one may be subcritical (the top of a heap).
+        std::vector<char> live(line[side].size());
         size_t lastLive = 0;
-        for (size_t r = 0; r < axis[side].size(); ++r) {
-            live[r] = alive(f, axis[side][r], f.normals.at(axis[side][r], f.n0));
+        for (size_t r = 0; r < line[side].size(); ++r) {
+            live[r] = alive(f, line[side][r], f.normals.at(line[side][r], f.n0));
             if (live[r]) lastLive = r;
         }
-        // An oblique lattice's reach beyond it: the axis continued to (lastLive + 1) / sin theta
-        // (at least the traced axis), its rows from there bounded by that length.
-        size_t lastRow = lastLive;
-        int reach = maxRings;
-        if (sinTheta < 1 - 1e-12 && lastLive > 0) {
-            reach = std::min(maxRings, int(std::ceil(double(lastLive + 1) / sinTheta)) + 2);
-            const int extra = reach - int(axis[side].size() - 1);
-            if (extra > 0) {
-                const size_t r0 = axis[side].size() - 1;
-                const Vec3d s = axis[side][r0];
-                traceLine(f, s, f.normals.at(s, f.n0), false, double(sign) * f.e1, sign * int(r0), 0, sign, 0, extra,
-                          lattice, &axis[side]);
-                live.resize(axis[side].size(), 0);
-            }
-            lastRow = axis[side].size() - 1;
-        }
-        for (size_t r = side == 0 ? 0 : 1; r <= lastRow; ++r) { // the origin's rows once
-            const int i = sign * int(r);
-            const Vec3d s = axis[side][r], n = f.normals.at(s, f.n0);
-            const bool beyond = r > lastLive;
-            for (const int dj : {1, -1}) {
-                std::vector<Vec3d> row;
-                traceLine(f, s, n, live[r] != 0, double(dj) * e2, i, 0, 0, dj, beyond ? reach : maxRings, lattice, &row);
-                most = std::max(most, int(row.size()));
+        const int sign = side == 0 ? 1 : -1;
+        for (size_t r = side == 0 ? 0 : 1; r <= lastLive; ++r) { // the origin's rows once
+            const Vec3d s = line[side][r], n = f.normals.at(s, f.n0);
+            for (const int d : {1, -1}) {
+                std::vector<Vec3d> tips;
+                traceLine(f, s, n, live[r] != 0, double(d) * row, sign * int(r) * ai, sign * int(r) * aj, d * ri,
+                          d * rj, maxRings, lattice, &tips);
+                most = std::max(most, int(tips.size()));
             }
         }
     }
+    return most;
+}
+
+// The tips in rows: rows along e2 from the e1 axis (the square planform's trace: rings around
+// x0 would be diamonds, |i| + |j| = r between two axes, that miss the corners of a round
+// supercritical region; rows reach every tip the region holds). A lattice whose e2 is not at
+// 90 degrees (squareness below 1) or a shot whose hexagons morph (`bothWays`) also gets rows
+// along e1 from the e2 axis, the first tip at a site winning: a point at distance R from x0
+// has |i| or |j| at most R / l (with e1, e2 unit and at least 60 degrees apart, both larger
+// would put it farther), so the two fills together reach every site of a round region, up to
+// the fluid's edge, whatever the angle. A still square keeps the single fill it always had.
+// Returns the most tips a line reached.
+int traceRows(const TraceFrame& f, int maxRings, LatticeTips& lattice, bool bothWays)
+{
+    addTip(lattice, 0, 0, f.x0, f.n0);
+    const Vec3d e2 = f.e2();
+    int most = fillRows(f, maxRings, lattice, f.e1, 1, 0, e2, 0, 1);
+    if (bothWays || f.squareness < 1) most = std::max(most, fillRows(f, maxRings, lattice, e2, 0, 1, f.e1, 1, 0));
     return most;
 }
 
@@ -456,7 +450,7 @@ void traceLattice(Pattern& pat, const FreeSurface& surface, const SurfaceFields&
     LatticeTips lattice;
     const int maxRings = int(std::ceil(diagonal / l)) + 1;
     if (squareness > 0 || P.morphs()) {
-        pat.info.rings = traceRows(frame, maxRings, lattice);
+        pat.info.rings = traceRows(frame, maxRings, lattice, P.morphs());
     } else {
         std::vector<Vec3d> axisTips[6];
         traceAxes(frame, maxRings, lattice, axisTips);

@@ -100,7 +100,8 @@ struct SpikePattern {
     double spacing = 0;     ///< tip spacing l [m]
     double field = 0;       ///< |H(x0)| [A/m]
     double magnetization = 0; ///< |M(x0)| [A/m]
-    int rings = 0;          ///< rings traced around x0 (a square: the most tips one traced line reached)
+    int rings = 0;          ///< rings traced around x0 (tips traced in rows, a square's or a morphing
+                            ///< lattice's: the most tips one traced line reached)
     SpikeParams::Lattice lattice = SpikeParams::Lattice::Hexagon; ///< the planform (SpikeParams::latticeOf)
     double squareness = 0;  ///< 0 = hexagons, 1 = squares, between: the morph (SpikeParams::squarenessOf)
 };

@@ -76,6 +76,8 @@ SpikeParams parseSpikeParams(const SceneDocument& doc)
         if (!m.has("magnet"))
             m.fail("magnet", "every [[spikes.magnets]] names the magnet it overrides (its index in [[magnets]], from 0)");
         const int index = m.integerInRange("magnet", 0, 0, INT_MAX);
+        if (!m.has("pattern"))
+            m.fail("pattern", "every [[spikes.magnets]] gives its magnet a pattern (\"hexagon\" or \"square\")");
         for (const auto& [other, l] : p.magnetLattice)
             if (other == index) m.fail("magnet", "magnet " + std::to_string(index) + " is overridden twice");
         p.magnetLattice.emplace_back(index, lattice(m, p.lattice));

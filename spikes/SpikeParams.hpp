@@ -32,7 +32,8 @@ struct SpikeParams {
         Paper,    ///< eq. 15: l = alpha / |H(x0)|, so tips crowd as the field grows
         Physical, ///< the critical wavelength lambda_c = 2 pi sqrt(sigma / (delta_rho g)) of
                   ///< linear theory: k = 2 pi / lambda_c, tips 2/sqrt(3) lambda_c apart on a
-                  ///< hexagon (eq. 13), lambda_c on a square
+                  ///< hexagon (eq. 13), lambda_c on a square, lambda_c / sin theta between
+                  ///< (squareness)
         Growth    ///< the wavenumber of fastest growth at the strongest |M| of the growth time
                   ///< (fastestGrowingWavenumber: a deep layer of the scene's viscosity): k_c at
                   ///< onset, growing with the field as measured after field jumps (Reimann et

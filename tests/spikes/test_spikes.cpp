@@ -568,7 +568,9 @@ SpikeResult lookFrame(const std::string& spikes, double time = 0.0, double lift 
                       const std::vector<std::string>& overrides = {})
 {
     const SpikeScene sc = scene(dishScene(kLookR, uniformField(kLookH) + "[spikes]\n" + spikes), overrides);
-    return addSpikes(frameInput(sc, makeFlatPool(kLookR, kDepth + lift, 20), time), sc.params);
+    SpikeInput in = frameInput(sc, makeFlatPool(kLookR, kDepth + lift, 20), time);
+    in.time = time;   // the frame's time: [[spikes.keys]] are read there
+    return addSpikes(in, sc.params);
 }
 
 } // namespace
@@ -814,48 +816,53 @@ TEST_CASE("the morphing planform keeps the tips at 3, the troughs above -1.5 and
     REQUIRE(morphProfile(0.3, 0.1, 1) == squareProfile(0.3, 0.1));
 }
 
-TEST_CASE("squareness lays the tips on e1 and e2 at 60 + 30 squareness degrees; 1 is the square planform",
+TEST_CASE("squareness lays the tips on e1 and e2 at 60 + 30 squareness degrees, and 1 is the square planform",
           "[spikes][look]")
 {
-    const double lambda = criticalWavelength(1200 - 1.2, 9.81, 0.025);
-    for (const double sq : {0.0, 0.5, 1.0}) {
-        INFO("squareness " << sq);
+    // Keys far after the frame make the shot a morphing one (tips traced in rows) while the
+    // frame itself still has the squareness of the first key.
+    auto morphing = [](double sq) {
         std::ostringstream keys;
-        keys << "spacing = \"physical\"\nsquareness = " << sq << "\n";
-        const SpikeResult res = lookFrame(keys.str());
-        REQUIRE(res.patterns.size() == 1);
-        const double theta = kPi / 3 * (1 + 0.5 * sq);
-        // The two shortest wave vectors stay at k_c: l = lambda_c / sin theta.
-        const double l = res.patterns[0].spacing;
-        REQUIRE(l == Approx(lambda / std::sin(theta)).epsilon(1e-9));
-        const auto tips = tipsByIndex(res);
-        const Vec3d x0 = tips.at({0, 0}).base;
-        const Vec3d a = tips.at({1, 0}).base - x0, b = tips.at({0, 1}).base - x0;
-        REQUIRE(a.norm() == Approx(l).epsilon(0.01));
-        REQUIRE(b.norm() == Approx(l).epsilon(0.01));
-        REQUIRE(std::acos(a.normalized().dot(b.normalized())) == Approx(theta).margin(0.01));
-        // Every tip stands where its lattice coordinates put it on the flat pool.
-        double worst = 0, reach = 0;
-        for (const auto& [ij, tip] : tips) {
-            worst = std::max(worst, (tip.base - (x0 + ij.first * a + ij.second * b)).norm());
-            reach = std::max(reach, (tip.base - x0).norm());
+        keys << "[[spikes.keys]]\ntime = 5.0\nsquareness = " << sq << "\n[[spikes.keys]]\ntime = 6.0\nsquareness = 1.0\n";
+        return keys.str();
+    };
+    const double lambda = criticalWavelength(1200 - 1.2, 9.81, 0.025);
+    for (const double sq : {0.0, 0.25, 0.5, 0.75, 1.0}) {
+        for (const bool physical : {true, false}) {
+            INFO("squareness " << sq << (physical ? ", physical spacing" : ", the paper's spacing"));
+            const SpikeResult res = lookFrame((physical ? "spacing = \"physical\"\n" : "") + morphing(sq));
+            REQUIRE(res.patterns.size() == 1);
+            REQUIRE(res.patterns[0].squareness == sq);
+            const double theta = kPi / 3 * (1 + 0.5 * sq);
+            const double l = res.patterns[0].spacing;
+            // The two shortest wave vectors stay at k_c: l = lambda_c / sin theta.
+            if (physical) REQUIRE(l == Approx(lambda / std::sin(theta)).epsilon(1e-9));
+            const auto tips = tipsByIndex(res);
+            const Vec3d x0 = tips.at({0, 0}).base;
+            const Vec3d a = tips.at({1, 0}).base - x0, b = tips.at({0, 1}).base - x0;
+            REQUIRE(a.norm() == Approx(l).epsilon(0.01));
+            REQUIRE(b.norm() == Approx(l).epsilon(0.01));
+            REQUIRE(std::acos(a.normalized().dot(b.normalized())) == Approx(theta).margin(0.01));
+            // Every tip stands where its lattice coordinates put it on the flat pool, and every
+            // site of the lattice inside the pool (1.5 spacings in from its wall: the whole free
+            // surface is supercritical) has its tip, whatever the angle.
+            double worst = 0;
+            for (const auto& [ij, tip] : tips) worst = std::max(worst, (tip.base - (x0 + ij.first * a + ij.second * b)).norm());
+            REQUIRE(worst < 0.02 * l);
+            int sites = 0, missing = 0;
+            for (int i = -40; i <= 40; ++i)
+                for (int j = -40; j <= 40; ++j) {
+                    if ((i * a + j * b).norm() > kLookR - 1.5 * l) continue;
+                    ++sites;
+                    if (!tips.count({i, j})) ++missing;
+                }
+            INFO(missing << " of " << sites << " sites without a tip");
+            REQUIRE(sites >= (physical ? 5 : 20));
+            REQUIRE(missing == 0);
+            requireHealthy(res);
         }
-        REQUIRE(worst < 0.02 * l);
-        // The lattice covers the round pool whatever its angle: tips reach 0.6 of the pool's
-        // radius in every direction (the supercritical region is the whole free surface).
-        for (int k = 0; k < 12; ++k) {
-            const Vec3d dir(std::cos(k * kPi / 6), std::sin(k * kPi / 6), 0);
-            double along = 0;
-            for (const auto& [ij, tip] : tips) {
-                const Vec3d d = tip.base - x0;
-                if ((d - d.dot(dir) * dir).norm() < 0.6 * l) along = std::max(along, d.dot(dir));
-            }
-            INFO("direction " << k * 30 << " deg: reach " << along << " of the pool's " << kLookR);
-            REQUIRE(along > 0.6 * kLookR);
-        }
-        requireHealthy(res);
     }
-    // squareness = 1 is pattern = "square", tip for tip.
+    // A still squareness of 1 is pattern = "square", tip for tip.
     const auto square = tipsByIndex(lookFrame("pattern = \"square\"\n")),
                morphed = tipsByIndex(lookFrame("squareness = 1.0\n"));
     REQUIRE(square.size() == morphed.size());
@@ -882,6 +889,11 @@ TEST_CASE("hexagons keyed into squares: every tip inside the pattern keeps its l
         const double l = res.patterns[0].spacing;
         auto now = tipsByIndex(res);
         x0 = now.at({0, 0}).base;
+        // The lattice does turn: 60 degrees at the first key, 90 from the second on.
+        const Vec3d e1 = now.at({1, 0}).base - x0, e2 = now.at({0, 1}).base - x0;
+        const double angle = std::acos(e1.normalized().dot(e2.normalized()));
+        if (frame == 0) REQUIRE(angle == Approx(kPi / 3).margin(0.01));
+        if (frame >= 15) REQUIRE(angle == Approx(kPi / 2).margin(0.01));
         double rNow = 0;
         for (const auto& [ij, tip] : now) rNow = std::max(rNow, (tip.base - x0).norm());
         if (frame > 0) {
@@ -924,17 +936,39 @@ TEST_CASE("[[spikes.magnets]] gives one magnet its own planform and the other ke
     }
     REQUIRE(ring == 4);
     requireHealthy(res);
-    // A magnet's own pattern pins it while the others morph with `squareness`.
-    const SpikeScene morph = scene(
-        dishScene(R, magnets + "[spikes]\nsquareness = 0.5\n[[spikes.magnets]]\nmagnet = 1\npattern = \"hexagon\"\n"));
+    // A magnet's own pattern pins it while the others morph with `squareness` (two equal
+    // magnets, so each pattern has tips of its own).
+    const SpikeScene morph = scene(dishScene(R, dipolePair(-0.022, -0.02, 0.022, -0.02, 1.5) +
+                                                    "[spikes]\nsquareness = 0.5\n[[spikes.magnets]]\nmagnet = 1\n"
+                                                    "pattern = \"hexagon\"\n"));
     const SpikeResult morphed = addSpikes(frameInput(morph, makeFlatPool(R, kDepth, 30)), morph.params);
     REQUIRE(morphed.patterns.size() == 2);
     for (const SpikePattern& p : morphed.patterns) REQUIRE(p.squareness == (p.magnet == 0 ? 0.5 : 0.0));
+    // Each pattern's cells stand at its own angle: 75 degrees for magnet 0, 60 for the pinned 1
+    // (the cell nearest the pattern's origin whose three corners are all tips of the pattern).
+    for (size_t p = 0; p < morphed.patterns.size(); ++p) {
+        std::map<std::pair<int, int>, Vec3d> base;
+        for (const SpikeTip& t : morphed.tips)
+            if (t.pattern == int(p)) base[{t.i, t.j}] = t.base;
+        double best = 1e9, angle = 0;
+        for (const auto& [ij, x] : base) {
+            const auto a = base.find({ij.first + 1, ij.second}), b = base.find({ij.first, ij.second + 1});
+            if (a == base.end() || b == base.end()) continue;
+            const double d = (x - morphed.patterns[p].origin).norm();
+            if (d >= best) continue;
+            best = d;
+            angle = std::acos((a->second - x).normalized().dot((b->second - x).normalized()));
+        }
+        INFO("pattern of magnet " << morphed.patterns[p].magnet << ": " << base.size() << " tips");
+        REQUIRE(best < 1e9);
+        REQUIRE(angle == Approx(morphed.patterns[p].magnet == 0 ? kPi * 75 / 180 : kPi / 3).margin(0.02));
+    }
     requireHealthy(morphed);
     REQUIRE_THROWS_AS(scene(dishScene(R, magnets + "[spikes]\n[[spikes.magnets]]\nmagnet = 2\npattern = \"square\"\n")),
                       SceneError);
     REQUIRE_THROWS_AS(scene(dishScene(R, magnets + "[spikes]\n[[spikes.magnets]]\npattern = \"square\"\n")),
                       SceneError);
+    REQUIRE_THROWS_AS(scene(dishScene(R, magnets + "[spikes]\n[[spikes.magnets]]\nmagnet = 0\n")), SceneError);
     REQUIRE_THROWS_AS(scene(dishScene(R, magnets + "[spikes]\n[[spikes.magnets]]\nmagnet = 0\npattern = \"squares\"\n")),
                       SceneError);
 }
