@@ -206,7 +206,7 @@ def dispersion(a, grow, q, rho, sigma, nu, nu_eff):
     4 mm (shorter ones are few particles across). With --dispersion-csv: wavelength_mm,
     rate_sim, rate_nu, rate_eff per ring."""
     times = {round(r[0], 5) for r in grow}
-    rings = {}   # ring index -> [(t, wavelength_mm, amplitude)]
+    rings = {}   # ring index (its place among the frame's rows) -> [(t, wavelength_mm, amplitude)]
     counter = {}
     try:
         with open(a.spectrum) as f:
@@ -231,18 +231,20 @@ def dispersion(a, grow, q, rho, sigma, nu, nu_eff):
         slope = sum((p[0] - tm) * (math.log(p[2]) - ym) for p in pts) / sum((p[0] - tm) ** 2 for p in pts)
         lam = sum(p[1] for p in pts) / n
         k = 2e3 * math.pi / lam
-        table.append((lam, slope, rate(k, q, rho, a.g, sigma, nu), rate(k, q, rho, a.g, sigma, nu_eff)))
+        table.append((lam, slope, rate(k, q, rho, a.g, sigma, nu), rate(k, q, rho, a.g, sigma, nu_eff), i))
     if a.dispersion_csv:
         with open(a.dispersion_csv, "w") as out:
             out.write("wavelength_mm,rate_sim_per_s,rate_nu_per_s,rate_eff_per_s\n")
             for row in table:
-                out.write("%.3f,%.2f,%.2f,%.2f\n" % row)
+                out.write("%.3f,%.2f,%.2f,%.2f\n" % row[:4])
     usable = [j for j, row in enumerate(table) if row[0] >= 4.0]
     if not usable:
         return float("nan")
     j = max(usable, key=lambda j: table[j][1])
-    if 0 < j < len(table) - 1 and j - 1 in usable:
-        (l0, s0, _, _), (l1, s1, _, _), (l2, s2, _, _) = table[j - 1], table[j], table[j + 1]
+    # The table runs from long to short wavelengths: both neighbours must be usable rings, and
+    # the rings next to the fastest one.
+    if 0 < j < len(table) - 1 and j + 1 in usable and table[j - 1][4] == table[j][4] - 1 == table[j + 1][4] - 2:
+        (l0, s0, _, _, _), (l1, s1, _, _, _), (l2, s2, _, _, _) = table[j - 1], table[j], table[j + 1]
         k0, k1, k2 = 1 / l0, 1 / l1, 1 / l2
         den = (k0 - k1) * (k0 - k2) * (k1 - k2)
         A = (k2 * (s1 - s0) + k1 * (s0 - s2) + k0 * (s2 - s1)) / den

@@ -148,14 +148,13 @@ def surface_heights(pts, grid, s):
         hi = np.where(below, mid, hi)
         lo = np.where(below, lo, mid)
     out = np.where(has, 0.5 * (lo + hi), np.nan).reshape(nx, ny)
-    # A line with no fluid under it (a gap between towers) takes its neighbours' mean.
-    gaps = np.argwhere(np.isnan(out))
-    filled = out.copy()
-    for i, j in gaps:
+    # A line with no fluid under it (a gap between towers) takes its neighbours' mean, in row
+    # order, a filled line counting for the ones after it (a wide gap fills from its edge).
+    for i, j in np.argwhere(np.isnan(out)):
         v = [out[(i + a) % nx, (j + b) % ny] for a in (-1, 0, 1) for b in (-1, 0, 1)]
         v = [w for w in v if not math.isnan(w)]
-        filled[i, j] = sum(v) / len(v) if v else 0.0
-    return filled
+        out[i, j] = sum(v) / len(v) if v else 0.0
+    return out
 
 
 def mode_numbers(nx, ny):
@@ -298,7 +297,7 @@ def mean_spike(field, lx, ly, lam):
     cx, cy = lx / nx, ly / ny
     mean = field.mean()
     top = field.max()
-    w = max(1, int(round(0.3 * lam / max(cx, cy))))
+    w = max(1, int(round(0.3 * lam / min(cx, cy))))
     local = field.copy()
     for a in range(-w, w + 1):
         for b in range(-w, w + 1):
