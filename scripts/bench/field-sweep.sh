@@ -40,7 +40,7 @@ holds="${FIELD_SWEEP_HOLDS:-0.001:0.875 0.001:0.9 0.001:0.925 0.001:0.95 0.001:0
 # The jumps, SPACING:FIELD/CRITICAL[:BOX_MM]: the flat layer's field switched on at once, in the
 # 24 mm box or a wider one (its side in mm: a 24 mm box holds few wavelengths near 4-7 mm).
 jumps="${FIELD_SWEEP_JUMPS:-0.001:1.1 0.001:1.2 0.001:1.5 0.00075:1.1 0.00075:1.2 0.00075:1.5
-  0.00075:1.1:48 0.00075:1.2:48 0.00075:1.3:48 0.00075:1.5:48 0.0005:1.2:48 0.0005:1.5:48}"
+  0.00075:1.1:48 0.00075:1.2:48 0.00075:1.3:48 0.00075:1.5:48 0.0005:1.2:48}"
 
 # simulate SCENE K=V...: bench_cached_shot in $cache/field-sweep.
 simulate() { bench_cached_shot field-sweep "$@"; }
