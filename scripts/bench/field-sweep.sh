@@ -196,7 +196,7 @@ if command -v gnuplot > /dev/null && [[ -s "$work/spike_1.1.dat" ]]; then
 set terminal pngcairo size 640,420
 set output '$out/field_spike.png'
 set xlabel 'distance from the tip / wavelength of the fundamental'
-set ylabel 'height above the mean level / the tip\'s'
+set ylabel 'height above the mean level / tip height'
 set key top right
 set grid
 plot '$work/spike_1.1.dat' using 1:3 with lines lw 2 dt 1 lc rgb 'black' title 'fundamental, J0(2 pi r / lambda)', \
