@@ -302,8 +302,9 @@ std::vector<Pattern> tracePatterns(const SpikeInput& in, const SpikeParams& P, c
     if (patterns.empty()) return {};
 
     // 3. Tips (Fig. 7): a hexagon traces six axes along the surface and fills the rings between
-    // them; a square, and every lattice of a shot whose hexagons morph, traces the i axis both
-    // ways and rows along e2 from its tips.
+    // them; a square traces the i axis both ways and rows along e2 from its tips; a rhombic
+    // lattice, and every lattice of a shot whose hexagons morph, also the rows along e1 from the
+    // e2 axis (traceRows).
     for (Pattern& pat : patterns) traceLattice(pat, freeSurface, fields, P, Mc, diagonal);
     settleSeams(patterns, in.magnets);
     return patterns;
