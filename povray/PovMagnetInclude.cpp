@@ -84,7 +84,8 @@ std::string magnetInclude(const std::vector<Magnet>& magnets, const RenderParams
     });
 
     // Bodies: a cylinder per dipole or bar magnet, split at the centre into its north and south
-    // halves; a torus (wire) per current loop, counted as "south" (the neutral body).
+    // halves; a torus (wire) per current loop and a hollow cylinder (winding) per coil, counted
+    // as "south" (the neutral body).
     std::vector<std::string> north, south;
     for (const Magnet& m : magnets) {
         const Vec3d c = toPovPoint(m.position);
@@ -106,6 +107,13 @@ std::string magnetInclude(const std::vector<Magnet>& magnets, const RenderParams
             auto row = [](const Vec3d& v) { return number(v.x()) + "," + number(v.y()) + "," + number(v.z()); };
             south.push_back("torus { " + number(r) + ", " + number(wire) + " matrix <" + row(bx) + ", " + row(d) + ", " +
                             row(bz) + ", " + row(c) + "> }");
+        } else if (body == MagnetBody::Tube) {
+            // A coil's winding: a hollow cylinder of the coil's radius and length, its wall a
+            // twentieth of the radius thick (at least half a POV unit, as the loop's wire).
+            const double wall = std::max(0.05 * r, 0.5);
+            south.push_back("difference { cylinder { " + vec(c - half * d) + ", " + vec(c + half * d) + ", " +
+                            number(r + 0.5 * wall) + " } cylinder { " + vec(c - (half + 1) * d) + ", " +
+                            vec(c + (half + 1) * d) + ", " + number(r - 0.5 * wall) + " } }");
         }
     }
     auto group = [&](const char* name, const std::vector<std::string>& parts) {

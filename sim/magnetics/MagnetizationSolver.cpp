@@ -1,5 +1,5 @@
 #include "sim/magnetics/MagnetizationSolver.hpp"
-#include "sim/magnetics/Gmres.hpp"
+#include "sim/core/Gmres.hpp"
 
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>

@@ -25,10 +25,11 @@ struct Magnet {
                               ///< normal of the current for Loop); normalized on use, a zero
                               ///< vector means "no axis" and gives zero field
     /// Dipole: moment m [A m^2]; Bar: pole strength q_m [A m] (moment m = q_m * length);
-    /// Uniform: field magnitude H0 [A/m]; Loop: current I [A].
+    /// Uniform: field magnitude H0 [A/m]; Loop: current I [A]; Coil: current I a turn [A].
     double strength = 0.0;
-    double length = 0.0;      ///< Bar: distance between the two pole charges [m]
-    double radius = 0.0;      ///< Loop: loop radius [m]
+    double length = 0.0;      ///< Bar: distance between the two pole charges [m]; Coil: winding length [m]
+    double radius = 0.0;      ///< Loop, Coil: radius [m]
+    double turns = 1.0;       ///< Coil: number of turns over `length` (strength is the current a turn)
     /// Regularization length eps [m] for fields evaluated at particles that may touch a pole
     /// or the wire. Dipole and Bar use r^2 -> r^2 + eps^2 (Plummer softening, still curl-free);
     /// Loop evaluates points closer than eps to the wire at distance eps from it (eps is capped

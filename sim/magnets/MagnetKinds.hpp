@@ -24,7 +24,8 @@ enum class MagnetKind {
     Dipole,  ///< point dipole at `position`, moment `strength` * direction
     Bar,     ///< two magnetic charges +-q_m, `length` apart along direction (Gilbert model)
     Uniform, ///< homogeneous field `strength` * direction everywhere (Helmholtz coils)
-    Loop     ///< circular current loop of `radius`, axis = direction, centred at `position`
+    Loop,    ///< circular current loop of `radius`, axis = direction, centred at `position`
+    Coil     ///< solenoid: `turns` turns over `length` on a cylinder of `radius` (an electromagnet)
 };
 
 /// The strongest magnetization of any permanent magnet material [A/m]: sintered NdFeB of
@@ -40,8 +41,8 @@ constexpr double kStrongestCurrentDensity = 1e9;
 
 /// The radius [m] of the smallest body that can carry a source of this kind and strength:
 /// dipole, a sphere of magnetization kStrongestMagnetization, (3 |m| / (4 pi M))^(1/3);
-/// bar, a pole face of that magnetization, sqrt(|q| / (pi M)); loop, the wire's radius
-/// sqrt(|I| / (pi J)); 0 for a uniform field. Dipole and bar fields are exact outside about
+/// bar, a pole face of that magnetization, sqrt(|q| / (pi M)); loop and coil, the wire's
+/// radius sqrt(|I| / (pi J)); 0 for a uniform field. Dipole and bar fields are exact outside about
 /// twice this radius and bounded within it (DipoleMagnet.cpp), the loop is clamped at it.
 double magnetBodyRadius(MagnetKind kind, double strength);
 
@@ -51,14 +52,16 @@ enum class MagnetCore {
     None,    ///< no solid (a uniform field)
     Point,   ///< a sphere around `position`
     Segment, ///< a capsule around the segment of `length` along the axis through `position`
-    Ring     ///< a torus around the circle of `radius` about the axis through `position`
+    Ring,    ///< a torus around the circle of `radius` about the axis through `position`
+    Tube     ///< the cylinder of `radius` and `length` about the axis (a coil's winding), thickened
 };
 
 /// The body ferro-pov draws for a magnet.
 enum class MagnetBody {
     None, ///< nothing (a uniform field has no body)
     Rod,  ///< a cylinder along the axis, split into north and south halves
-    Ring  ///< a torus around the axis (a current loop's wire)
+    Ring, ///< a torus around the axis (a current loop's wire)
+    Tube  ///< a hollow cylinder around the axis (a coil's winding)
 };
 
 /// Field and Jacobian of one magnet at x [m]; `axis` is its unit direction.
@@ -79,11 +82,14 @@ struct MagnetKindInfo {
     ///   bar     1e6 A m:   a pole face of 1 m^2 of NdFeB;
     ///   uniform 1e9 A/m:   1257 T, beyond the strongest field ever made (~1000 T, pulsed);
     ///   loop    1e9 A:     several times the ampere-turns of a fusion reactor's central
-    ///                      solenoid (~1.5e8); H = 5e11 A/m at the centre of a 1 mm loop.
+    ///                      solenoid (~1.5e8); H = 5e11 A/m at the centre of a 1 mm loop;
+    ///   coil    1e6 A a turn, with at most kMostTurns turns: 1e11 ampere-turns, H = 1e14 A/m
+    ///                      inside a 1 mm long coil.
     double maxStrength;
     bool positioned;          ///< reads `position` and `softening` (false: same everywhere)
     bool usesLength;          ///< `length` required: the distance between the poles
     bool usesRadius;          ///< `radius` required: the loop's radius
+    bool usesTurns;           ///< `turns` required: the coil's number of turns (Magnet::turns)
     MagnetBody body;          ///< what ferro-pov draws
     MagnetCore core;          ///< the solid the fluid keeps out of
     MagnetFieldFn field;
@@ -103,19 +109,27 @@ double uniformBodyRadius(double strength);
 Vec3d loopMagnetField(const Magnet&, const Vec3d&, const Vec3d&);      // LoopMagnet.cpp
 Mat3d loopMagnetGradient(const Magnet&, const Vec3d&, const Vec3d&);
 double loopBodyRadius(double strength);
+Vec3d coilMagnetField(const Magnet&, const Vec3d&, const Vec3d&);      // CoilMagnet.cpp
+Mat3d coilMagnetGradient(const Magnet&, const Vec3d&, const Vec3d&);
+double coilBodyRadius(double strength);
+
+/// Most turns a coil may have (with maxStrength, 1e11 ampere-turns).
+constexpr double kMostTurns = 1e5;
 
 /// One row per kind, in MagnetKind order.
 inline const MagnetKindInfo kMagnetKinds[] = {
-    // kind, name, strength key, unit, max strength, positioned, length, radius, drawn body, solid core,
+    // kind, name, strength key, unit, max strength, positioned, length, radius, turns, drawn body, solid core,
     // field, gradient, body radius
-    {MagnetKind::Dipole, "dipole", "moment", "A m^2", 1e6, true, false, false, MagnetBody::Rod, MagnetCore::Point,
+    {MagnetKind::Dipole, "dipole", "moment", "A m^2", 1e6, true, false, false, false, MagnetBody::Rod, MagnetCore::Point,
      &dipoleMagnetField, &dipoleMagnetGradient, &dipoleBodyRadius},
-    {MagnetKind::Bar, "bar", "pole_strength", "A m", 1e6, true, true, false, MagnetBody::Rod, MagnetCore::Segment,
+    {MagnetKind::Bar, "bar", "pole_strength", "A m", 1e6, true, true, false, false, MagnetBody::Rod, MagnetCore::Segment,
      &barMagnetField, &barMagnetGradient, &barBodyRadius},
-    {MagnetKind::Uniform, "uniform", "field", "A/m", 1e9, false, false, false, MagnetBody::None, MagnetCore::None,
+    {MagnetKind::Uniform, "uniform", "field", "A/m", 1e9, false, false, false, false, MagnetBody::None, MagnetCore::None,
      &uniformMagnetField, &uniformMagnetGradient, &uniformBodyRadius},
-    {MagnetKind::Loop, "loop", "current", "A", 1e9, true, false, true, MagnetBody::Ring, MagnetCore::Ring,
+    {MagnetKind::Loop, "loop", "current", "A", 1e9, true, false, true, false, MagnetBody::Ring, MagnetCore::Ring,
      &loopMagnetField, &loopMagnetGradient, &loopBodyRadius},
+    {MagnetKind::Coil, "coil", "current", "A", 1e6, true, true, true, true, MagnetBody::Tube, MagnetCore::Tube,
+     &coilMagnetField, &coilMagnetGradient, &coilBodyRadius},
 };
 
 /// The row of `kind`.

@@ -33,6 +33,8 @@ MagnetTrack parseMagnet(const TableReader& r)
         m.length = r.positive("length");
     if (info.usesRadius)
         m.radius = r.positive("radius");
+    if (info.usesTurns)
+        m.turns = r.numberInRange("turns", m.turns, 1, kMostTurns);
     if (info.positioned)
         m.softening = r.nonNegative("softening", m.softening);
     for (const TableReader& k : r.keyframes("keys", "magnets.keys")) {

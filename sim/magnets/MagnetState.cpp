@@ -22,7 +22,12 @@ void writeMagnetComments(ParticleTable& table, const std::vector<Magnet>& magnet
         std::snprintf(buf, sizeof buf, "%s %.9g %.9g %.9g %.9g %.9g %.9g %.9g %.9g %.9g %.9g", magnetKindName(m.kind),
                       m.position.x(), m.position.y(), m.position.z(), d.x(), d.y(), d.z(), m.strength, m.length,
                       m.radius, m.softening);
-        table.comments.emplace_back("magnet", buf);
+        std::string line = buf;
+        if (magnetKindInfo(m.kind).usesTurns) { // only a coil's line has the 11th number
+            std::snprintf(buf, sizeof buf, " %.9g", m.turns);
+            line += buf;
+        }
+        table.comments.emplace_back("magnet", line);
     }
     if (law) {
         char buf[64];
@@ -53,6 +58,9 @@ std::vector<Magnet> readMagnetComments(const ParticleTable& table)
             throw ParticleFileError("malformed 'comment magnet " + value + "' (expected kind and 10 numbers)");
         const MagnetKindInfo* info = findMagnetKind(kind);
         if (!info) throw ParticleFileError("unknown magnet kind '" + kind + "' in header");
+        if (info->usesTurns && !(in >> m.turns))
+            throw ParticleFileError("malformed 'comment magnet " + value + "' (a " + kind +
+                                    " needs kind and 11 numbers, the last its turns)");
         m.kind = info->kind;
         // What the scene parser (MagnetScene.cpp) guarantees, so that a hand-edited or foreign
         // header cannot give the field evaluation a magnet it would overflow on (fuzz finding).
@@ -65,6 +73,8 @@ std::vector<Magnet> readMagnetComments(const ParticleTable& table)
                 info->strengthUnit + " for a " + info->name + " magnet");
         if (info->usesLength && !(m.length > 0)) bad("length must be > 0");
         if (info->usesRadius && !(m.radius > 0)) bad("radius must be > 0");
+        if (info->usesTurns && !(m.turns >= 1 && m.turns <= kMostTurns))
+            bad("turns must be within [1, " + formatNumber(kMostTurns) + "]");
         if (!(m.softening >= 0)) bad("softening must be >= 0");
         magnets.push_back(m);
     }

@@ -5,8 +5,9 @@
 // One `comment magnet ...` line per magnet, in scene order, after `comment magnet_count N`:
 //     comment magnet_count 1
 //     comment magnet dipole px py pz dx dy dz strength length radius softening
+// (a coil's line adds its turns as an 11th number; the other kinds' lines never change)
 // kind is a name of sim/magnets/MagnetKinds.hpp (dipole, bar, ...); position [m], unit direction, strength in the kind's unit
-// (moment A m^2, pole strength A m, field A/m, current A), length, radius, softening [m];
+// (moment A m^2, pole strength A m, field A/m, current A, current a turn A), length, radius, softening [m];
 // numbers are printed with 9 significant digits (float-exact, more than enough for a field).
 // The fluid's magnetic law is carried as `comment susceptibility chi0` and
 // `comment saturation Ms` (A/m, 0 = linear).

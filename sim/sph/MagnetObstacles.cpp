@@ -31,7 +31,8 @@ std::vector<MagnetObstacle> magnetObstacles(const std::vector<MagnetTrack>& trac
         const MagnetKindInfo& kind = magnetKindInfo(m.kind);
         if (kind.core == MagnetCore::None) continue;
         const double body = kind.bodyRadius(m.strength);
-        if (!(body > 0)) continue;
+        // A coil's winding stands whatever its current; the other bodies carry their strength.
+        if (!(body > 0) && kind.core != MagnetCore::Tube) continue;
         MagnetObstacle o;
         o.axis = unitOr(m.direction, Vec3d::UnitZ());
         o.radius = body + clearance;
@@ -44,6 +45,10 @@ std::vector<MagnetObstacle> magnetObstacles(const std::vector<MagnetTrack>& trac
         } else if (kind.core == MagnetCore::Ring) {
             o.ringRadius = m.radius;
             reach += m.radius;
+        } else if (kind.core == MagnetCore::Tube) {
+            o.ringRadius = m.radius;
+            o.halfLength = 0.5 * m.length;
+            reach += m.radius + 0.5 * m.length;
         }
         if (dt > 0 && !track.keys.empty()) {
             const double h = 1e-3 * dt;
@@ -60,12 +65,14 @@ std::vector<MagnetObstacle> magnetObstacles(const std::vector<MagnetTrack>& trac
 
 namespace {
 
-/// The closest point of the body's core (segment or circle) to p.
+/// The closest point of the body's core (segment, circle or cylinder) to p.
 Vec3d closestCore(const MagnetObstacle& body, const Vec3d& p) {
     if (body.ringRadius > 0) {
         const Vec3d d = p - body.a;
-        const Vec3d inPlane = d - d.dot(body.axis) * body.axis;
-        return body.a + body.ringRadius * unitOr(inPlane, perpendicular(body.axis));
+        const double z = d.dot(body.axis);
+        const Vec3d inPlane = d - z * body.axis;
+        return body.a + std::clamp(z, -body.halfLength, body.halfLength) * body.axis +
+               body.ringRadius * unitOr(inPlane, perpendicular(body.axis));
     }
     const Vec3d s = body.b - body.a;
     const double len2 = s.squaredNorm();

@@ -7,7 +7,9 @@
 //           (the real body is the cylinder between the pole faces; the caps beyond the
 //           faces are where the model's field is flattened over the pole, so no fluid
 //           belongs there either);
-//   loop    a torus of the wire's radius around the loop.
+//   loop    a torus of the wire's radius around the loop;
+//   coil    a cylindrical shell around its winding (the sheet of `radius` over `length`), at
+//           any current: the winding is there with the current off too.
 // Like Container::constrain, a hard position constraint after each step's move: a
 // particle closer than half a spacing to a body is put back on the body's surface plus
 // half a spacing (where the centre of the first layer of fluid touching a wall is), and
@@ -29,6 +31,8 @@ namespace ferro {
 struct MagnetObstacle {
     Vec3d a{0, 0, 0}, b{0, 0, 0}; ///< the body's core segment (a == b: a sphere)
     double ringRadius = 0;        ///< > 0: the core is a circle of this radius around a, normal `axis`
+    double halfLength = 0;        ///< with ringRadius: the core is the cylinder of that radius
+                                  ///< from a - halfLength axis to a + halfLength axis (a coil)
     Vec3d axis{0, 0, 1};
     double radius = 0;            ///< distance from the core the fluid's centres keep [m]
     Vec3d velocity{0, 0, 0};      ///< the magnet's translation [m/s]

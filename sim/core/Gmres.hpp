@@ -1,5 +1,6 @@
 #pragma once
-// Restarted GMRES(m) (Saad & Schultz 1986), header-only; used by the magnetization solver
+// Restarted GMRES(m) (Saad & Schultz 1986), header-only; used by the solids' surface-charge
+// solve (sim/solids/SurfaceChargeSolver.cpp) and the magnetization solver
 // (MagnetizationSolver.cpp) for the matrix-free linear system of each Newton step,
 // (I - G chi_local) dH = -R (G the dipole field of the particles, chi_local the Jacobian of
 // M(H)).

@@ -1,7 +1,7 @@
-// Restarted GMRES (sim/magnetics/Gmres.hpp) against Eigen's dense LU solve: a nonsymmetric
+// Restarted GMRES (sim/core/Gmres.hpp) against Eigen's dense LU solve: a nonsymmetric
 // well-conditioned system, a diagonal one (converges in as many steps as distinct
 // eigenvalues), the maxApply budget, and restarts.
-#include "sim/magnetics/Gmres.hpp"
+#include "sim/core/Gmres.hpp"
 
 #include <catch2/catch.hpp>
 

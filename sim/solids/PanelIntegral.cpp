@@ -1,0 +1,70 @@
+#include "sim/solids/PanelIntegral.hpp"
+
+#include <Eigen/Geometry>
+
+#include <algorithm>
+#include <cmath>
+
+namespace ferro {
+
+namespace {
+
+// integral over the segment p -> q of dl / |x - y|, for the edge line's distance from x of
+// sqrt(d2): ln((R_q + s_q) / (R_p + s_p)), written as ln((R_p - s_p) / (R_q - s_q)) where the
+// foot lies beyond q, and as the product over d^2 where it lies within the edge (R + s -> 0
+// on the far side would lose every digit). d2 is floored at (1e-9 |q - p|)^2.
+double edgeLogIntegral(const Vec3d& x, const Vec3d& p, const Vec3d& q, Vec3d& t, double& len) {
+    t = q - p;
+    len = t.norm();
+    if (!(len > 0)) return 0.0;
+    t /= len;
+    const Vec3d dp = p - x, dq = q - x;
+    const double sp = dp.dot(t), sq = dq.dot(t);
+    const double Rp = dp.norm(), Rq = dq.norm();
+    if (sp >= 0) return std::log((Rq + sq) / (Rp + sp));
+    if (sq <= 0) return std::log((Rp - sp) / (Rq - sq));
+    const double d2 = std::max((dp - sp * t).squaredNorm(), 1e-18 * len * len);
+    return std::log((Rq + sq) * (Rp - sp) / d2);
+}
+
+} // namespace
+
+Vec3d uniformTriangleField(const Vec3d& x, const Vec3d& a, const Vec3d& b, const Vec3d& c, bool onPanel) {
+    const Vec3d nRaw = (b - a).cross(c - a);
+    const double n2 = nRaw.norm();
+    if (!(n2 > 0)) return Vec3d::Zero();
+    const Vec3d n = nRaw / n2;
+    Vec3d I = Vec3d::Zero();
+    const Vec3d* v[3] = {&a, &b, &c};
+    for (int k = 0; k < 3; ++k) {
+        Vec3d t;
+        double len;
+        const double L = edgeLogIntegral(x, *v[k], *v[(k + 1) % 3], t, len);
+        if (len > 0) I += L * t.cross(n); // t x n: the in-plane outward normal (counter-clockwise)
+    }
+    if (!onPanel) {
+        const Vec3d r0 = a - x, r1 = b - x, r2 = c - x;
+        const double l0 = r0.norm(), l1 = r1.norm(), l2 = r2.norm();
+        const double triple = r0.dot(r1.cross(r2));
+        const double denom = l0 * l1 * l2 + r0.dot(r1) * l2 + r0.dot(r2) * l1 + r1.dot(r2) * l0;
+        // 2 atan2 is the solid angle with the sign of the triple product, which is negative on
+        // the side n points to; the field there points along +n.
+        I -= 2.0 * std::atan2(triple, denom) * n;
+    }
+    return I;
+}
+
+Mat3d uniformTriangleGradient(const Vec3d& x, const Vec3d& a, const Vec3d& b, const Vec3d& c) {
+    const double scale = (x - (a + b + c) / 3.0).norm();
+    Mat3d J = Mat3d::Zero();
+    if (!(scale > 0)) return J;
+    const double h = 1e-6 * scale;
+    for (int j = 0; j < 3; ++j) {
+        Vec3d s = Vec3d::Zero();
+        s[j] = h;
+        J.col(j) = (uniformTriangleField(x + s, a, b, c) - uniformTriangleField(x - s, a, b, c)) / (2 * h);
+    }
+    return J;
+}
+
+} // namespace ferro

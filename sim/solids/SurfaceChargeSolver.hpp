@@ -1,0 +1,133 @@
+#pragma once
+// The magnetization of soft-iron solids: a boundary-integral solve for the magnetic surface
+// charge on their surfaces, and the field that charge makes anywhere.
+//
+// Model. A solid of relative permeability mu_r = 1 + chi in an applied field H0 (the magnets,
+// the fluid) is magnetized, M = chi H inside; with no free current and uniform chi it has no
+// volume charge, only the surface charge sigma = M . n [A/m]. Its field is
+//     H_s(x) = 1/(4 pi) integral_S sigma(y) (x - y) / |x - y|^3 dA_y,
+// and B . n is continuous across the surface, mu_r H_n^- = H_n^+, with
+// H_n^+- = H0 . n + K'[sigma] +- sigma / 2 (K' the principal value of H_s . n on S). So
+//     sigma / 2 - lambda K'[sigma] = lambda H0 . n,     lambda = (mu_r - 1) / (mu_r + 1),
+// a Fredholm equation of the second kind whose spectrum lies in [(1 - lambda)/2, 1]: well
+// conditioned for any mu_r except for one mode per closed body, the charge a perfect
+// conductor of flux would hold at zero interior field, whose eigenvalue (1 - lambda)/2
+// vanishes as mu_r -> infinity. A body's total charge is zero (div B = 0), and that mode is
+// exactly its total charge, so each body adds (1/|S_b|) integral_{S_b} sigma dA to its rows:
+// the solution is unchanged and the spectrum stays in [(1 - lambda)/2 + ..., 1] with the
+// conductor mode lifted to ~1, so GMRES converges in about as many steps at mu_r = 1e5 as
+// at 10 (tests/sim/solids).
+//
+// The field inside a solid is the small difference of H0 and H_s when mu_r is large (H_in =
+// 3 H0 / (mu_r + 2) in a sphere), so it is not evaluated from sigma. Inside, H = -grad psi
+// with psi harmonic and d psi / dn = -H_n^- = -sigma / chi known; a second single layer tau
+// on S with -tau/2 + K'[tau] = sigma / chi (the same operator, the same deflation) gives
+// H_in = 1/(4 pi) integral tau (x - y)/|x - y|^3 dA at relative accuracy, and the panel's
+// magnetization chi |H_in|, which an optional saturation bounds (Froehlich-Kennelly,
+// M = chi H / (1 + chi H / Ms): each panel's chi is lowered to that secant value and the
+// charge solved again until the secants settle).
+//
+// Discretization: a flat panel per triangle, sigma and tau constant on it, collocation at
+// the centroid. A panel's field is its closed form (PanelIntegral.hpp) within
+// kExactReach panel radii, a 3-point rule (degree 2) within kRuleReach, and a point charge
+// at the centroid beyond. Convergence with the panel count: tests/sim/solids.
+//
+// Units: SI (m, A/m); double precision throughout (a few thousand panels).
+#include "sim/solids/PanelIntegral.hpp"
+
+#include <array>
+#include <cstdint>
+#include <functional>
+#include <vector>
+
+namespace ferro {
+
+/// One solid's closed surface at one moment, world coordinates.
+struct SolidSurface {
+    std::vector<Vec3d> vertices;                     ///< [m]
+    std::vector<std::array<uint32_t, 3>> triangles;  ///< counter-clockwise seen from outside
+    double permeability = 1000;                      ///< relative permeability mu_r > 1
+    double saturation = 0;                           ///< Ms [A/m]; 0 = linear (no saturation)
+};
+
+class SurfaceChargeSolver {
+public:
+    /// Panels closer than this many source radii (centroid to farthest vertex) use the
+    /// closed form, closer than kRuleReach the 3-point rule, farther a point charge.
+    static constexpr double kExactReach = 4.0;
+    static constexpr double kRuleReach = 12.0;
+
+    struct Params {
+        double tolerance = 1e-8;   ///< GMRES stops at |residual| <= tolerance |rhs| (2-norms)
+        int maxIterations = 400;   ///< operator applications per linear solve
+        int saturationSteps = 30;  ///< most secant updates with a saturation
+    };
+
+    struct Stats {
+        int iterations = 0;        ///< operator applications over all linear solves
+        int secantSteps = 0;       ///< saturation updates (0 without saturation)
+        double residual = 0;       ///< the last charge solve's relative residual
+        bool converged = true;     ///< every linear solve reached its tolerance
+    };
+
+    SurfaceChargeSolver() = default;
+    explicit SurfaceChargeSolver(const Params& p) : params_(p) {}
+
+    /// The solids at one moment. Builds the panels and their near-field lists; the charges
+    /// are cleared. Degenerate (zero-area) triangles are kept as panels without area.
+    void setSurfaces(const std::vector<SolidSurface>& surfaces);
+
+    /// Solves the charge in the applied field `applied` (H0 [A/m] at a point [m]: the
+    /// magnets, the fluid), evaluated at every panel centroid. The previous charge is not
+    /// used as a start (the solve is cheap next to its field evaluations).
+    Stats solve(const std::function<Vec3d(const Vec3d&)>& applied);
+
+    /// The solids' own field H_s [A/m] at x [m] outside every solid (inside it is H_s too,
+    /// but that is the cancelling part; use interiorField there).
+    Vec3d field(const Vec3d& x) const;
+    /// dH_s/dx [A/m^2] at x, outside the solids.
+    Mat3d gradient(const Vec3d& x) const;
+    /// The total field H [A/m] at x inside a solid (applied plus own), from the interior layer.
+    Vec3d interiorField(const Vec3d& x) const;
+
+    size_t panelCount() const { return centroid_.size(); }
+    const std::vector<Vec3d>& centroids() const { return centroid_; }
+    const std::vector<Vec3d>& normals() const { return normal_; }
+    const std::vector<double>& areas() const { return area_; }
+    /// Surface charge sigma = M . n [A/m] per panel (after solve()).
+    const std::vector<double>& charge() const { return sigma_; }
+    /// |M| [A/m] per panel: chi |H_in| at its collocation point (after solve()).
+    const std::vector<double>& magnetizationMagnitude() const { return magnitude_; }
+    /// The secant susceptibility each panel ended with (chi without saturation).
+    const std::vector<double>& susceptibility() const { return chi_; }
+
+private:
+    // Per panel, the curved surface's own contribution at its centroid that the flat panel
+    // lacks (along its normal, without 1/(4 pi)); see the .cpp.
+    std::vector<double> curvatureTerms(const std::vector<SolidSurface>& surfaces) const;
+    // Principal-value field at every collocation point of the density `d` (one value a panel),
+    // without 1/(4 pi).
+    void collocationField(const std::vector<double>& d, std::vector<Vec3d>& out) const;
+    // The field of density d at an arbitrary point, without 1/(4 pi).
+    Vec3d densityField(const std::vector<double>& d, const Vec3d& x) const;
+    Mat3d densityGradient(const std::vector<double>& d, const Vec3d& x) const;
+    // Solves  diag * u - lambda (K' u) + deflation = rhs  (diag = +1/2 exterior, -1/2 interior).
+    int solveLayer(double diag, const std::vector<double>& lambda, const std::vector<double>& rhs,
+                   std::vector<double>& u, double& residual) const;
+
+    Params params_;
+    std::vector<std::array<Vec3d, 3>> corner_;
+    std::vector<Vec3d> centroid_, normal_;
+    std::vector<double> area_, radius_;
+    std::vector<std::array<Vec3d, 3>> rule_;  // the 3-point rule's points per panel
+    std::vector<uint32_t> body_;             // solid index of each panel
+    std::vector<double> bodyArea_;           // total area per solid
+    std::vector<double> chi0_, saturation_;  // per panel: the solid's chi and Ms
+    // Collocation near field (CSR): for panel i, sources nearIndex_[nearStart_[i] ..] with
+    // their exact (or 3-point) field per unit density at i.
+    std::vector<uint32_t> nearStart_, nearIndex_;
+    std::vector<Vec3d> nearField_;
+    std::vector<double> sigma_, tau_, chi_, magnitude_;
+};
+
+} // namespace ferro
