@@ -62,7 +62,11 @@ int main(int argc, char** argv) {
             return kExitOk;
         }
         opt.fingerprint = doc.fingerprint();
-        opt.prerollFingerprint = doc.fingerprint({"fluid", "container", "sim", "magnetization"});
+        // The solids are walls the pre-roll settles against; a scene without them keeps the
+        // fingerprint it always had (its cached pre-roll stays valid).
+        std::vector<std::string> prerollSections{"fluid", "container", "sim", "magnetization"};
+        if (doc.hasSection("solids")) prerollSections.push_back("solids");
+        opt.prerollFingerprint = doc.fingerprint(prerollSections);
         const auto limit = limitThreads(threads >= 0 ? threads : scene.solver.threads);
         runShot(scene, opt);
         return kExitOk;

@@ -7,6 +7,8 @@
 // safety box. Boundary particles do the physics; `constrain` is the safety net.
 #include "sim/geometry/ContainerParams.hpp"
 
+#include <array>
+#include <cstdint>
 #include <memory>
 #include <string>
 #include <vector>
@@ -33,5 +35,17 @@ public:
 
 /// Builds the container of `params`. Throws SceneError for an unreadable or open mesh.
 std::unique_ptr<Container> makeContainer(const ContainerParams& params, const std::string& where);
+
+/// A solid inside the vessel (a magnetizable sculpture, sim/solids): a closed, outward
+/// triangle mesh in world coordinates [m] that the fluid stays outside of.
+struct SolidWall {
+    std::vector<Vec3d> vertices;
+    std::vector<std::array<uint32_t, 3>> triangles;
+};
+/// The container of `params` with `solids` standing in it: the mesh container's walls on
+/// each solid (boundary samples on its surface, the watertight motion constraint), fluid
+/// where the vessel holds it and no solid is. Without solids, makeContainer(params).
+std::unique_ptr<Container> makeContainerWithSolids(const ContainerParams& params, const std::vector<SolidWall>& solids,
+                                                   const std::string& where);
 
 } // namespace ferro

@@ -4,6 +4,8 @@
 #include "sim/geometry/Container.hpp"
 
 #include <algorithm>
+#include <array>
+#include <vector>
 #include <cmath>
 #include <limits>
 #include <memory>
@@ -19,6 +21,9 @@ std::unique_ptr<Container> makeBoxContainer(const Vec3d& lo, const Vec3d& hi, bo
 std::unique_ptr<Container> makeDishContainer(const Vec3d& center, double radius, double height);
 /// Throws SceneError (prefixed with `where`) for an unreadable, open or empty mesh.
 std::unique_ptr<Container> makeMeshContainer(const ContainerParams& params, const std::string& where);
+/// A closed, outward mesh the fluid stays outside of (makeContainerWithSolids).
+std::unique_ptr<Container> makeMeshObstacle(const std::vector<Vec3d>& vertices,
+                                            const std::vector<std::array<uint32_t, 3>>& triangles);
 
 /// Bounds of a container without walls [m].
 constexpr double kHuge = 1e30;

@@ -132,14 +132,19 @@ void addIfApart(HashGrid& points, double radius, const Vec3d& p) {
 
 class MeshContainer final : public Container {
 public:
-    MeshContainer(const LoadedMesh& mesh, const ContainerParams& params)
-        : fluidInside_(params.fluidInside) {
+    /// `obstacle`: a solid standing in the vessel (makeMeshObstacle): the fluid is anywhere
+    /// outside it, so there is no safety box (contains() and constrain() test the mesh alone).
+    MeshContainer(const LoadedMesh& mesh, const ContainerParams& params, bool obstacle = false)
+        : fluidInside_(params.fluidInside), obstacle_(obstacle) {
         Vec3d lo = mesh.verts[0], hi = mesh.verts[0];
         for (const Vec3d& v : mesh.verts) {
             lo = lo.cwiseMin(v);
             hi = hi.cwiseMax(v);
         }
-        if (params.hasBounds) {
+        if (obstacle_) {
+            boxLo_ = Vec3d::Constant(-kHuge);
+            boxHi_ = Vec3d::Constant(kHuge);
+        } else if (params.hasBounds) {
             boxLo_ = params.boundsMin;
             boxHi_ = params.boundsMax;
         } else {
@@ -192,7 +197,9 @@ public:
 
         // Slide offset: ~1e-4 of a cell, and several float steps (rounding moves a stored
         // position by half a step per axis), so a slid particle stays on its side.
-        const double maxAbs = boxLo_.cwiseAbs().cwiseMax(boxHi_.cwiseAbs()).maxCoeff();
+        // (An obstacle's box is unbounded: its own extent sets the float steps.)
+        const double maxAbs = obstacle_ ? lo.cwiseAbs().cwiseMax(hi.cwiseAbs()).maxCoeff()
+                                        : boxLo_.cwiseAbs().cwiseMax(boxHi_.cwiseAbs()).maxCoeff();
         delta_ = std::max(1e-4 * grid_.h, 8.0 * maxAbs * double(std::numeric_limits<float>::epsilon()));
         planeTol_ = 0.25 * delta_;
     }
@@ -286,6 +293,7 @@ private:
     };
 
     bool clampBox(Vec3& x, Vec3& v) const {
+        if (obstacle_) return false;
         bool corrected = false;
         for (int a = 0; a < 3; ++a) corrected |= clampAxis(x[a], v[a], boxLoF_[a], boxHiF_[a]);
         return corrected;
@@ -408,6 +416,7 @@ private:
     }
 
     bool fluidInside_;
+    bool obstacle_ = false;
     Vec3d boxLo_, boxHi_;
     float boxLoF_[3], boxHiF_[3];
     Vec3d origin_;
@@ -421,6 +430,19 @@ private:
 
 std::unique_ptr<Container> makeMeshContainer(const ContainerParams& params, const std::string& where) {
     return std::make_unique<MeshContainer>(loadMesh(params, where), params);
+}
+
+std::unique_ptr<Container> makeMeshObstacle(const std::vector<Vec3d>& vertices,
+                                            const std::vector<std::array<uint32_t, 3>>& triangles) {
+    LoadedMesh mesh;
+    mesh.verts = vertices;
+    for (const auto& t : triangles)
+        if (t[0] != t[1] && t[1] != t[2] && t[0] != t[2]) mesh.tris.push_back(t);
+    // The fluid is outside the mesh and not boxed in by it: the vessel bounds the fluid.
+    ContainerParams params;
+    params.type = ContainerParams::Type::Mesh;
+    params.fluidInside = false;
+    return std::make_unique<MeshContainer>(mesh, params, true);
 }
 
 } // namespace container_detail

@@ -149,7 +149,9 @@ void MagnetizationSolver::solveSelfConsistent(DipoleTree& tree, bool useTree, co
 
 MagnetizationSolver::Stats MagnetizationSolver::solve(const std::vector<Vec3>& x, const std::vector<Real>& volume,
                                                       const std::vector<Magnet>& magnets, std::vector<Vec3>& H,
-                                                      std::vector<Vec3>& M, std::vector<Eigen::Matrix3f>* J) {
+                                                      std::vector<Vec3>& M, std::vector<Eigen::Matrix3f>* J,
+                                                      const std::vector<Vec3>* extraField) {
+    const bool extra = extraField && extraField->size() == x.size();
     const auto t0 = Clock::now();
     Stats stats;
     const size_t n = x.size();
@@ -166,7 +168,8 @@ MagnetizationSolver::Stats MagnetizationSolver::solve(const std::vector<Vec3>& x
         } else { // non-magnetic fluid: the field is the magnets' alone
             tbb::parallel_for(tbb::blocked_range<size_t>(0, n, 1024), [&](const tbb::blocked_range<size_t>& r) {
                 for (size_t i = r.begin(); i < r.end(); ++i) {
-                    const Vec3d h = magnetField(magnets, x[i].cast<double>());
+                    Vec3d h = magnetField(magnets, x[i].cast<double>());
+                    if (extra) h += (*extraField)[i].cast<double>();
                     H[i] = h.allFinite() ? Vec3(h.cast<Real>()) : Vec3(Vec3::Zero());
                 }
             });
@@ -202,6 +205,7 @@ MagnetizationSolver::Stats MagnetizationSolver::solve(const std::vector<Vec3>& x
         for (size_t k = r.begin(); k < r.end(); ++k) {
             const size_t i = order[k] % n;
             Vec3d h = magnetField(magnets, x[i].cast<double>());
+            if (extra) h += (*extraField)[i].cast<double>();
             if (!h.allFinite()) h.setZero();
             Hext.segment<3>(3 * k) = h;
             Vec3d start = h;

@@ -95,8 +95,12 @@ public:
     /// finite inputs (coincident particles, particles on a pole). If J is given it receives
     /// the total-field Jacobians at the solution (see fieldGradient()), computed on the same
     /// tree (one build instead of two).
+    /// `extraField`, if given (x.size() entries, input order), is applied field beyond the
+    /// magnets' (the magnetized solids', sim/magnetics/SolidCoupling), added to theirs at each
+    /// particle; J then holds only the magnets' and the particles' parts.
     Stats solve(const std::vector<Vec3>& x, const std::vector<Real>& volume, const std::vector<Magnet>& magnets,
-                std::vector<Vec3>& H, std::vector<Vec3>& M, std::vector<Eigen::Matrix3f>* J = nullptr);
+                std::vector<Vec3>& H, std::vector<Vec3>& M, std::vector<Eigen::Matrix3f>* J = nullptr,
+                const std::vector<Vec3>* extraField = nullptr);
 
     /// J[i](a, b) = dH_a / dx_b [A/m^2] of the TOTAL field at particle i: the magnets'
     /// analytic Jacobian plus that of the particles' field with magnetization M (as solved),

@@ -3,6 +3,7 @@
 // sim/magnets/MagnetScene.cpp for the magnets) is the one place that fills them from a
 // TOML scene file; every default here is the documented default of
 // the matching scene key (see examples/annotated.toml).
+#include "sim/solids/SolidParams.hpp"
 #include "sim/magnets/MagnetField.hpp"
 #include "sim/magnets/MagnetizationParams.hpp"
 #include "sim/core/ParticleFile.hpp"
@@ -132,6 +133,7 @@ struct SimScene {
     SolverParams solver;
     std::vector<MagnetTrack> magnets;   ///< [[magnets]], each with optional [[magnets.keys]]
     MagnetizationParams magnetization;  ///< [magnetization]
+    std::vector<SolidParams> solids;    ///< [[solids]]: magnetizable solids, walls to the fluid
 };
 
 } // namespace ferro

@@ -14,6 +14,7 @@ const std::vector<std::string>& shotSceneSections()
     static const std::vector<std::string> sections = {
         "shot", "fluid", "container", "sim",   // ferro-sim: SimSceneFile.cpp
         "magnets", "magnetization",            // sim/magnets/MagnetScene.cpp
+        "solids",                              // sim/solids/SolidScene.cpp
         "surface",                             // surface/SurfaceParams.cpp
         "spikes",                              // spikes/SpikeParams.cpp
         "render"};                             // povray/RenderParams.cpp
@@ -183,6 +184,11 @@ SimScene parseSimScene(const SceneDocument& doc, SceneUse use)
     scene.solver = parseSolver(doc);
     scene.magnets = parseMagnets(doc);
     scene.magnetization = parseMagnetization(doc);
+    scene.solids = parseSolids(doc);
+    for (size_t k = 0; k < scene.solids.size(); ++k)
+        if (use == SceneUse::Simulate && scene.solids[k].moves())
+            throw SceneError(scene.path + ": solids[" + std::to_string(k) +
+                             "].keys: ferro-sim keeps solids still for now (a keyed solid that moves is not simulated); key only a still pose");
     return scene;
 }
 

@@ -147,10 +147,27 @@ void SurfaceChargeSolver::setSurfaces(const std::vector<SolidSurface>& surfaces)
             nearIndex_[nearStart_[i] + k] = lists[i][k].first;
             nearField_[nearStart_[i] + k] = lists[i][k].second;
         }
-    sigma_.assign(n, 0.0);
-    tau_.assign(n, 0.0);
+    sigma_.clear(); // no warm start across a new set of panels
+    tau_.clear();
     chi_ = chi0_;
     magnitude_.assign(n, 0.0);
+    interiorSolved_ = false;
+    // The normal operator as a dense float matrix when it fits (kDenseLimit panels, 64 MB):
+    // a GMRES step is then a matrix-vector product instead of the O(P^2) pair sweep.
+    dense_.resize(0, 0);
+    if (n > 0 && n <= kDenseLimit) {
+        dense_.resize(Eigen::Index(n), Eigen::Index(n));
+        parallelFor(n, [&](size_t i) {
+            const Vec3d& x = centroid_[i];
+            for (size_t j = 0; j < n; ++j) {
+                const Vec3d r = x - centroid_[j];
+                const double r2 = r.squaredNorm();
+                dense_(Eigen::Index(i), Eigen::Index(j)) = r2 > 0 ? float(area_[j] * normal_[i].dot(r) / (r2 * std::sqrt(r2))) : 0.0f;
+            }
+            for (uint32_t k = nearStart_[i]; k < nearStart_[i + 1]; ++k)
+                dense_(Eigen::Index(i), Eigen::Index(nearIndex_[k])) += float(normal_[i].dot(nearField_[k]));
+        });
+    }
 }
 
 void SurfaceChargeSolver::collocationField(const std::vector<double>& d, std::vector<Vec3d>& out) const {
@@ -178,6 +195,7 @@ void SurfaceChargeSolver::collocationField(const std::vector<double>& d, std::ve
 
 Vec3d SurfaceChargeSolver::densityField(const std::vector<double>& d, const Vec3d& x) const {
     Vec3d h = Vec3d::Zero();
+    if (d.size() != centroid_.size()) return h; // nothing solved: no charge
     for (size_t j = 0; j < centroid_.size(); ++j) {
         if (d[j] == 0) continue;
         const Vec3d r = x - centroid_[j];
@@ -200,6 +218,7 @@ Vec3d SurfaceChargeSolver::densityField(const std::vector<double>& d, const Vec3
 
 Mat3d SurfaceChargeSolver::densityGradient(const std::vector<double>& d, const Vec3d& x) const {
     Mat3d J = Mat3d::Zero();
+    if (d.size() != centroid_.size()) return J; // nothing solved: no charge
     const Mat3d I3 = Mat3d::Identity();
     for (size_t j = 0; j < centroid_.size(); ++j) {
         if (d[j] == 0) continue;
@@ -224,37 +243,69 @@ Mat3d SurfaceChargeSolver::densityGradient(const std::vector<double>& d, const V
     return J;
 }
 
+void SurfaceChargeSolver::normalField(const std::vector<double>& d, std::vector<double>& out) const {
+    const size_t n = centroid_.size();
+    out.resize(n);
+    if (dense_.rows() == Eigen::Index(n)) {
+        Eigen::VectorXf v(n);
+        for (size_t j = 0; j < n; ++j) v[Eigen::Index(j)] = float(d[j]);
+        const Eigen::VectorXf r = dense_ * v;
+        for (size_t i = 0; i < n; ++i) out[i] = double(r[Eigen::Index(i)]);
+        return;
+    }
+    std::vector<Vec3d> F;
+    collocationField(d, F);
+    for (size_t i = 0; i < n; ++i) out[i] = normal_[i].dot(F[i]);
+}
+
 int SurfaceChargeSolver::solveLayer(double diag, const std::vector<double>& lambda, const std::vector<double>& rhs,
                                     std::vector<double>& u, double& residual) const {
     const size_t n = centroid_.size();
     const double sign = diag > 0 ? 1.0 : -1.0;
-    std::vector<double> tmp(n);
-    std::vector<Vec3d> F;
-    auto op = [&](const Eigen::VectorXd& v) {
-        for (size_t i = 0; i < n; ++i) tmp[i] = v[Eigen::Index(i)];
-        collocationField(tmp, F);
+    std::vector<double> tmp(n), Fn;
+    auto apply = [&](const std::vector<double>& v, Eigen::VectorXd& out) {
+        normalField(v, Fn);
         // Each body's total charge (the deflation of its conductor mode).
         std::vector<double> total(bodyArea_.size(), 0.0);
-        for (size_t i = 0; i < n; ++i) total[body_[i]] += area_[i] * tmp[i];
-        Eigen::VectorXd out(n);
+        for (size_t i = 0; i < n; ++i) total[body_[i]] += area_[i] * v[i];
+        out.resize(Eigen::Index(n));
         for (size_t i = 0; i < n; ++i) {
             const double b = bodyArea_[body_[i]];
-            out[Eigen::Index(i)] = diag * tmp[i] - lambda[i] * kInv4Pi * normal_[i].dot(F[i]) +
-                                   sign * (b > 0 ? total[body_[i]] / b : 0.0);
+            out[Eigen::Index(i)] = diag * v[i] - lambda[i] * kInv4Pi * Fn[i] + sign * (b > 0 ? total[body_[i]] / b : 0.0);
         }
+    };
+    auto op = [&](const Eigen::VectorXd& v) {
+        for (size_t i = 0; i < n; ++i) tmp[i] = v[Eigen::Index(i)];
+        Eigen::VectorXd out;
+        apply(tmp, out);
         return out;
     };
     Eigen::VectorXd b(n), x;
     for (size_t i = 0; i < n; ++i) b[Eigen::Index(i)] = rhs[i];
     const double bn = b.norm();
-    u.assign(n, 0.0);
     if (!(bn > 0)) {
+        u.assign(n, 0.0);
         residual = 0;
         return 0;
     }
-    double res = 0;
-    const int applied = gmres(op, b, x, params_.tolerance * bn, params_.maxIterations, 60, res);
-    for (size_t i = 0; i < n; ++i) u[i] = x[Eigen::Index(i)];
+    // Warm start: the last solution (the magnets and the fluid move little between solves),
+    // GMRES on the correction.
+    int applied = 0;
+    const bool warm = u.size() == n;
+    if (warm) {
+        Eigen::VectorXd Au;
+        apply(u, Au);
+        ++applied;
+        b -= Au;
+    } else {
+        u.assign(n, 0.0);
+    }
+    double res = b.norm();
+    if (res > params_.tolerance * bn)
+        applied += gmres(op, b, x, params_.tolerance * bn, params_.maxIterations, 60, res);
+    else
+        x.setZero(Eigen::Index(n));
+    for (size_t i = 0; i < n; ++i) u[i] += x[Eigen::Index(i)];
     residual = res / bn;
     return applied;
 }
@@ -267,8 +318,7 @@ SurfaceChargeSolver::Stats SurfaceChargeSolver::solve(const std::function<Vec3d(
     parallelFor(n, [&](size_t i) { h0n[i] = applied(centroid_[i]).dot(normal_[i]); });
     chi_ = chi0_;
     const bool saturating = std::any_of(saturation_.begin(), saturation_.end(), [](double m) { return m > 0; });
-    // The interior layer's operator is -tau/2 + K'[tau]: solveLayer's "- lambda K'" with lambda -1.
-    std::vector<double> lambda(n), rhs(n), minusOnes(n, -1.0);
+    std::vector<double> lambda(n), rhs(n);
     std::vector<Vec3d> F;
     for (int step = 0;; ++step) {
         for (size_t i = 0; i < n; ++i) {
@@ -279,17 +329,13 @@ SurfaceChargeSolver::Stats SurfaceChargeSolver::solve(const std::function<Vec3d(
         st.iterations += solveLayer(0.5, lambda, rhs, sigma_, res);
         st.residual = res;
         st.converged = st.converged && res <= params_.tolerance * 1.0001;
-        // The interior layer: -tau/2 + K'[tau] = sigma / chi (the inside normal field).
-        for (size_t i = 0; i < n; ++i) rhs[i] = chi_[i] > 0 ? sigma_[i] / chi_[i] : 0.0;
-        double resIn = 0;
-        st.iterations += solveLayer(-0.5, minusOnes, rhs, tau_, resIn);
-        st.converged = st.converged && resIn <= params_.tolerance * 1.0001;
+        interiorSolved_ = false;
+        if (!saturating) break; // the interior layer waits until asked for (interiorField)
+        st.iterations += solveInterior();
         collocationField(tau_, F);
         double change = 0;
         for (size_t i = 0; i < n; ++i) {
-            const Vec3d Hin = kInv4Pi * F[i] - 0.5 * tau_[i] * normal_[i];
-            const double h = Hin.norm();
-            magnitude_[i] = chi_[i] * h;
+            const double h = magnitude_[i] / chi_[i];
             if (saturation_[i] > 0) {
                 // Froehlich-Kennelly secant, damped by a geometric mean (the secant of a
                 // saturating panel overshoots: its field rises as its chi falls).
@@ -299,18 +345,83 @@ SurfaceChargeSolver::Stats SurfaceChargeSolver::solve(const std::function<Vec3d(
                 chi_[i] = next;
             }
         }
-        if (!saturating || change < 1e-4 || step + 1 >= params_.saturationSteps) {
-            st.secantSteps = saturating ? step + 1 : 0;
+        if (change < 1e-4 || step + 1 >= params_.saturationSteps) {
+            st.secantSteps = step + 1;
             break;
         }
     }
     return st;
 }
 
+int SurfaceChargeSolver::solveInterior() const {
+    if (interiorSolved_ || sigma_.size() != centroid_.size()) return 0;
+    // The interior layer: -tau/2 + K'[tau] = sigma / chi (the inside normal field);
+    // solveLayer's "- lambda K'" with lambda -1.
+    const size_t n = centroid_.size();
+    std::vector<double> rhs(n), minusOnes(n, -1.0);
+    for (size_t i = 0; i < n; ++i) rhs[i] = chi_[i] > 0 ? sigma_[i] / chi_[i] : 0.0;
+    double res = 0;
+    const int it = solveLayer(-0.5, minusOnes, rhs, tau_, res);
+    std::vector<Vec3d> F;
+    collocationField(tau_, F);
+    for (size_t i = 0; i < n; ++i) magnitude_[i] = chi_[i] * (kInv4Pi * F[i] - 0.5 * tau_[i] * normal_[i]).norm();
+    interiorSolved_ = true;
+    return it;
+}
+
 Vec3d SurfaceChargeSolver::field(const Vec3d& x) const { return kInv4Pi * densityField(sigma_, x); }
 
 Mat3d SurfaceChargeSolver::gradient(const Vec3d& x) const { return kInv4Pi * densityGradient(sigma_, x); }
 
-Vec3d SurfaceChargeSolver::interiorField(const Vec3d& x) const { return kInv4Pi * densityField(tau_, x); }
+void SurfaceChargeSolver::fieldAndGradient(const Vec3d& x, Vec3d& H, Mat3d& J) const {
+    if (sigma_.size() != centroid_.size()) { // nothing solved: no charge
+        H.setZero();
+        J.setZero();
+        return;
+    }
+    // One pass: the far panels (the most) as point charges, field and Jacobian together; the
+    // near ones by their own rules (densityField / densityGradient).
+    Vec3d h = Vec3d::Zero();
+    Mat3d g = Mat3d::Zero();
+    const size_t n = centroid_.size();
+    for (size_t j = 0; j < n; ++j) {
+        const double d = sigma_[j];
+        if (d == 0) continue;
+        const Vec3d r = x - centroid_[j];
+        const double r2 = r.squaredNorm();
+        const double reach = kRuleReach * radius_[j];
+        if (r2 < reach * reach) {
+            const double dist = std::sqrt(r2);
+            if (dist < kExactReach * radius_[j]) {
+                h += d * uniformTriangleField(x, corner_[j][0], corner_[j][1], corner_[j][2]);
+                g += d * uniformTriangleGradient(x, corner_[j][0], corner_[j][1], corner_[j][2]);
+            } else {
+                for (const Vec3d& y : rule_[j]) {
+                    const Vec3d ry = x - y;
+                    const double s2 = ry.squaredNorm();
+                    const double inv3 = d * area_[j] / 3.0 / (s2 * std::sqrt(s2));
+                    h += inv3 * ry;
+                    g += inv3 * (Mat3d::Identity() - 3.0 * ry * ry.transpose() / s2);
+                }
+            }
+            continue;
+        }
+        const double inv3 = d * area_[j] / (r2 * std::sqrt(r2));
+        h += inv3 * r;
+        g += inv3 * (Mat3d::Identity() - 3.0 * r * r.transpose() / r2);
+    }
+    H = kInv4Pi * h;
+    J = kInv4Pi * g;
+}
+
+Vec3d SurfaceChargeSolver::interiorField(const Vec3d& x) const {
+    solveInterior();
+    return kInv4Pi * densityField(tau_, x);
+}
+
+const std::vector<double>& SurfaceChargeSolver::magnetizationMagnitude() const {
+    solveInterior();
+    return magnitude_;
+}
 
 } // namespace ferro

@@ -35,6 +35,8 @@
 // Units: SI (m, A/m); double precision throughout (a few thousand panels).
 #include "sim/solids/PanelIntegral.hpp"
 
+#include <Eigen/Core>
+
 #include <array>
 #include <cstdint>
 #include <functional>
@@ -56,6 +58,8 @@ public:
     /// closed form, closer than kRuleReach the 3-point rule, farther a point charge.
     static constexpr double kExactReach = 4.0;
     static constexpr double kRuleReach = 12.0;
+    /// Up to this many panels the normal operator is kept as a dense float matrix (64 MB).
+    static constexpr size_t kDenseLimit = 4096;
 
     struct Params {
         double tolerance = 1e-8;   ///< GMRES stops at |residual| <= tolerance |rhs| (2-norms)
@@ -78,15 +82,21 @@ public:
     void setSurfaces(const std::vector<SolidSurface>& surfaces);
 
     /// Solves the charge in the applied field `applied` (H0 [A/m] at a point [m]: the
-    /// magnets, the fluid), evaluated at every panel centroid. The previous charge is not
-    /// used as a start (the solve is cheap next to its field evaluations).
+    /// magnets, the fluid), evaluated at every panel centroid. GMRES starts from the last
+    /// charge (warm start) unless coldStart() was called since: results then agree with a
+    /// cold solve to the tolerance, not to the last bit (a resumed run starts cold, so the
+    /// caller makes every frame's first solve cold).
     Stats solve(const std::function<Vec3d(const Vec3d&)>& applied);
+    /// Forgets the last charge as the next solve's start.
+    void coldStart() { sigma_.clear(); }
 
     /// The solids' own field H_s [A/m] at x [m] outside every solid (inside it is H_s too,
     /// but that is the cancelling part; use interiorField there).
     Vec3d field(const Vec3d& x) const;
     /// dH_s/dx [A/m^2] at x, outside the solids.
     Mat3d gradient(const Vec3d& x) const;
+    /// field() and gradient() at x in one pass over the panels.
+    void fieldAndGradient(const Vec3d& x, Vec3d& H, Mat3d& J) const;
     /// The total field H [A/m] at x inside a solid (applied plus own), from the interior layer.
     Vec3d interiorField(const Vec3d& x) const;
 
@@ -97,7 +107,7 @@ public:
     /// Surface charge sigma = M . n [A/m] per panel (after solve()).
     const std::vector<double>& charge() const { return sigma_; }
     /// |M| [A/m] per panel: chi |H_in| at its collocation point (after solve()).
-    const std::vector<double>& magnetizationMagnitude() const { return magnitude_; }
+    const std::vector<double>& magnetizationMagnitude() const;
     /// The secant susceptibility each panel ended with (chi without saturation).
     const std::vector<double>& susceptibility() const { return chi_; }
 
@@ -111,7 +121,12 @@ private:
     // The field of density d at an arbitrary point, without 1/(4 pi).
     Vec3d densityField(const std::vector<double>& d, const Vec3d& x) const;
     Mat3d densityGradient(const std::vector<double>& d, const Vec3d& x) const;
-    // Solves  diag * u - lambda (K' u) + deflation = rhs  (diag = +1/2 exterior, -1/2 interior).
+    // The normal component of collocationField (the dense matrix when there is one).
+    void normalField(const std::vector<double>& d, std::vector<double>& out) const;
+    // The interior layer tau and the panels' |M| for the current sigma (once per solve).
+    int solveInterior() const;
+    // Solves  diag * u - lambda (K' u) + deflation = rhs  (diag = +1/2 exterior, -1/2 interior),
+    // starting from u when it has a value per panel (warm start).
     int solveLayer(double diag, const std::vector<double>& lambda, const std::vector<double>& rhs,
                    std::vector<double>& u, double& residual) const;
 
@@ -127,7 +142,10 @@ private:
     // their exact (or 3-point) field per unit density at i.
     std::vector<uint32_t> nearStart_, nearIndex_;
     std::vector<Vec3d> nearField_;
-    std::vector<double> sigma_, tau_, chi_, magnitude_;
+    std::vector<double> sigma_, chi_;
+    mutable std::vector<double> tau_, magnitude_; // the interior layer, solved on demand
+    mutable bool interiorSolved_ = false;
+    Eigen::MatrixXf dense_;                       // the normal operator (P <= kDenseLimit)
 };
 
 } // namespace ferro

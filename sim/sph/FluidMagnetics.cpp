@@ -1,6 +1,7 @@
 #include "sim/sph/FluidMagnetics.hpp"
 
 #include "sim/magnetics/MagnetizationSolver.hpp"
+#include "sim/magnetics/SolidCoupling.hpp"
 #include "sim/core/ParticleLoops.hpp"
 #include "sim/sph/Kernel.hpp"
 
@@ -33,6 +34,8 @@ FluidMagnetics::FluidMagnetics(const SimScene& scene, double particleVolume, dou
     : tracks_(scene.magnets), law_(scene.magnetization), volume_(particleVolume), spacing_(spacing),
       rho0_(scene.fluid.restDensity), gravity_(scene.solver.gravity.norm()),
       curve_(scene.magnetization.susceptibility, scene.magnetization.saturation), flat_(spacing, particleVolume) {
+    if (active() && !scene.solids.empty())
+        solids_ = std::make_unique<SolidCoupling>(scene.solids, spacing, scene.path);
     if (active() && magnetic()) {
         solver_ = std::make_unique<MagnetizationSolver>(law_);
         const ContainerParams& c = scene.container;
@@ -101,7 +104,13 @@ void FluidMagnetics::solve(const std::vector<Vec3>& x, const std::function<Surfa
         forEachParticle(n, [&](size_t i) { predicted[i] = Hext_[i] + scale * Hind_[i]; });
     }
     std::vector<Real> volume(n, Real(volume_));
-    const MagnetizationSolver::Stats st = solver_->solve(x, volume, magnets_, H_, M_);
+    if (solids_) {
+        // The solids first, in the magnets' field and the fluid's of the last solve
+        // (SolidCoupling.hpp); the fluid then sees theirs as applied field.
+        updateSolids(x, M_.size() == n ? M_ : std::vector<Vec3>{}, forced); // M_: the last solve's, or a resumed file's
+        forEachParticle(n, [&](size_t i) { Hext_[i] = magnetField(magnets_, x[i].cast<double>()).cast<Real>() + Hsol_[i]; });
+    }
+    const MagnetizationSolver::Stats st = solver_->solve(x, volume, magnets_, H_, M_, nullptr, solids_ ? &Hsol_ : nullptr);
     forEachParticle(n, [&](size_t i) { Hind_[i] = H_[i] - Hext_[i]; });
     const double ind2 = deterministicSum(n, [&](size_t i) { return double(Hind_[i].squaredNorm()); });
     const double tot2 = deterministicSum(n, [&](size_t i) { return double(H_[i].squaredNorm()); });
@@ -119,7 +128,7 @@ void FluidMagnetics::solve(const std::vector<Vec3>& x, const std::function<Surfa
             const double h = H_[i].cast<double>().norm();
             const double chi = h > 0 ? M_[i].cast<double>().norm() / h : 0.0;
             const Vec3d dM = chi * (H_[i] - predicted[i]).cast<double>();
-            return (fieldGradient(magnets_, x[i].cast<double>()) * dM).squaredNorm();
+            return (appliedGradient(i, x[i]) * dM).squaredNorm();
         });
         const double kelvin2 = kelvin_.size() == n ? deterministicSum(n, [&](size_t i) { return double(kelvin_[i].squaredNorm()); }) : 0.0;
         const double aRef = std::max(gravity_, std::sqrt(kelvin2 / double(n)));
@@ -175,7 +184,7 @@ FluidMagnetics::SurfacePoint FluidMagnetics::surfacePoint(size_t i, const Vec3& 
     // field there plus the particle's own induced field, and M from the law.
     const double chi0 = law_.susceptibility, Ms = law_.saturation;
     const Vec3d xs = x.cast<double>() + 0.5 * spacing_ * outward;
-    const Vec3d applied = magnetField(magnets_, xs);
+    const Vec3d applied = magnetField(magnets_, xs) + (Hsol_.size() > i ? Vec3d(Hsol_[i].cast<double>()) : Vec3d::Zero());
     const Vec3d Hs = applied + (H_[i] - Hext_[i]).cast<double>();
     const double h = Hs.norm();
     const double Mn = h > 0 ? langevinMagnetization(h, chi0, Ms) * Hs.dot(outward) / h : 0.0;
@@ -226,7 +235,12 @@ void FluidMagnetics::update(double t, const std::vector<Vec3>& x, const SurfaceP
     H_.resize(n, Vec3::Zero());
     M_.resize(n, Vec3::Zero());
     Hind_.resize(n, Vec3::Zero());
-    forEachParticle(n, [&](size_t i) { Hext_[i] = magnetField(magnets_, x[i].cast<double>()).cast<Real>(); });
+    // The solids' field rides with the particles between solves (refreshed at each solve).
+    if (solids_ && Hsol_.size() != n) updateSolids(x, {}, true);
+    forEachParticle(n, [&](size_t i) {
+        Hext_[i] = magnetField(magnets_, x[i].cast<double>()).cast<Real>();
+        if (solids_) Hext_[i] += Hsol_[i];
+    });
     ++stats_.steps;
     auto largest = [&](const std::vector<Vec3>& field) {
         return std::sqrt(double(tbb::parallel_reduce(
@@ -304,13 +318,13 @@ void FluidMagnetics::computeBodyForce(const std::vector<Vec3>& x) {
                 kelvin_[i] = Vec3::Zero();
                 return;
             }
-            const Vec3d gradH = fieldGradient(magnets_, x[i].cast<double>()) * (he / h);
+            const Vec3d gradH = appliedGradient(i, x[i]) * (he / h);
             kelvin_[i] = (kMu0 / rho0_ * curve_.magnetization(h) * gradH).cast<Real>();
         });
         return;
     }
     forEachParticle(x.size(), [&](size_t i) {
-        const Eigen::Matrix3f J = fieldGradient(magnets_, x[i].cast<double>()).cast<Real>();
+        const Eigen::Matrix3f J = appliedGradient(i, x[i]).cast<Real>();
         kelvin_[i] = scale * (J * M_[i]);
     });
 }
@@ -353,6 +367,25 @@ void FluidMagnetics::permute(const std::vector<uint32_t>& order) {
     ferro::permute(M_, order);
     ferro::permute(kelvin_, order);
     ferro::permute(HextSolved_, order);
+    if (Hsol_.size() == order.size()) {
+        ferro::permute(Hsol_, order);
+        ferro::permute(Jsol_, order);
+    }
+}
+
+Mat3d FluidMagnetics::appliedGradient(size_t i, const Vec3& x) const {
+    Mat3d g = fieldGradient(magnets_, x.cast<double>());
+    if (Jsol_.size() > i) g += Jsol_[i].cast<double>();
+    return g;
+}
+
+void FluidMagnetics::updateSolids(const std::vector<Vec3>& x, const std::vector<Vec3>& M, bool cold) {
+    const std::vector<Real> volume(x.size(), Real(volume_));
+    const SolidCoupling::Stats st = solids_->update(time_, magnets_, x, volume, M, law_, cold, Hsol_, Jsol_);
+    stats_.solidPanels = st.panels;
+    stats_.solidIterations = st.iterations;
+    stats_.solidSeconds += st.seconds;
+    stats_.converged = stats_.converged && st.converged;
 }
 
 std::optional<FluidMagnetics::CurveMemory> FluidMagnetics::curveMemory() const {
@@ -370,6 +403,8 @@ void FluidMagnetics::setCurveMemory(const CurveMemory& c) {
 void FluidMagnetics::setState(const std::vector<Vec3>& H, const std::vector<Vec3>& M) {
     H_ = H;
     M_ = M;
+    Hsol_.clear(); // the solids are solved again from this state
+    Jsol_.clear();
     solved_ = false;
     // The curve was fitted to another state's surface: the next fit starts afresh unless
     // setCurveMemory() brings back the curve that belongs to this state.

@@ -38,6 +38,7 @@
 namespace ferro {
 
 class MagnetizationSolver;
+class SolidCoupling;
 
 /// Counters for the progress line.
 struct MagneticsStats {
@@ -50,6 +51,9 @@ struct MagneticsStats {
     double residual = 0;       ///< largest relative residual of the solves since the reset
     double cacheError = 0;   ///< measured error the cached field had reached, as RMS Kelvin
                              ///< acceleration error relative to gravity / the Kelvin force
+    size_t solidPanels = 0;  ///< panels of the magnetized solids (0: none)
+    int solidIterations = 0; ///< GMRES applications of the solids' last charge solve
+    double solidSeconds = 0; ///< time spent on the solids since the reset [s]
 };
 
 class FluidMagnetics {
@@ -134,6 +138,7 @@ public:
         stats_.solves = 0;
         stats_.converged = true;
         stats_.residual = 0;
+        stats_.solidSeconds = 0;
     }
     const MagnetizationParams& law() const { return law_; }
 
@@ -152,6 +157,11 @@ private:
     std::vector<DemagnetizationCurve::SurfaceSample> surfaceSamples(const std::vector<Vec3>& x, const SurfaceView& view) const;
     void applyLaw();
     void computeKelvin(const std::vector<Vec3>& x, const std::function<SurfaceView()>& surface);
+    /// The applied field's Jacobian at particle i: the magnets' at x plus the solids' cached one.
+    Mat3d appliedGradient(size_t i, const Vec3& x) const;
+    /// Solves the solids' charge and their field at x (SolidCoupling), M the fluid's (empty:
+    /// none); `cold` at a frame's first solve (see SolidCoupling::update).
+    void updateSolids(const std::vector<Vec3>& x, const std::vector<Vec3>& M, bool cold);
     void computeBodyForce(const std::vector<Vec3>& x);
     void computeSurfacePressure(const std::vector<Vec3>& x, const std::vector<Vec3>& colorGradient,
                                 const std::vector<Real>& exposure);
@@ -160,6 +170,9 @@ private:
     MagnetizationParams law_;
     double volume_ = 0, spacing_ = 0, rho0_ = 0, gravity_ = 0;
     std::unique_ptr<MagnetizationSolver> solver_;
+    std::unique_ptr<SolidCoupling> solids_;  // [[solids]] (null without)
+    std::vector<Vec3> Hsol_;                 // the solids' field at each particle, refreshed at each solve
+    std::vector<Eigen::Matrix3f> Jsol_;      // and its Jacobian
     std::vector<Magnet> magnets_;            // at the time of the last update
     std::vector<Vec3> Hext_, Hind_, H_, M_;  // per particle, current order
     std::vector<Vec3> kelvin_;               // Kelvin acceleration per particle [m/s^2]

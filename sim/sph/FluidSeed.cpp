@@ -3,7 +3,10 @@
 #include "sim/magnets/MagnetKinds.hpp"
 
 #include "sim/core/MachineMemory.hpp"
+#include "sim/core/Constants.hpp"
 #include "sim/core/SceneDocument.hpp"
+
+#include <Eigen/Geometry>
 
 #include <algorithm>
 #include <cmath>
@@ -113,6 +116,81 @@ void checkRunSize(const SimScene& scene) {
     throw SceneError(msg.str());
 }
 
+std::vector<SolidWall> solidWalls(const SimScene& scene) {
+    std::vector<SolidWall> walls;
+    for (const SolidParams& s : scene.solids) {
+        const double edge = s.panelSize > 0 ? s.panelSize
+                          : scene.fluid.spacing > 0 ? 2 * scene.fluid.spacing : s.radius / 8;
+        const SolidSurface surface = solidSurfaceAt(s, solidShape(s, edge, scene.path), 0.0);
+        walls.push_back({surface.vertices, surface.triangles});
+    }
+    return walls;
+}
+
+void checkSolids(const SimScene& scene, const std::vector<SolidWall>& walls) {
+    if (walls.empty()) return;
+    const std::unique_ptr<Container> vessel = makeContainer(scene.container, scene.path);
+    for (size_t k = 0; k < walls.size(); ++k) {
+        const std::string key = scene.path + ": solids[" + std::to_string(k) + "]";
+        const SolidWall& w = walls[k];
+        // Inside the vessel (a sculpture) or outside it (a core under the dish), not across
+        // its wall: vertices on the wall itself (a base on the floor) count as either.
+        size_t in = 0, out = 0;
+        for (const Vec3d& v : w.vertices) {
+            if (vessel->contains(v, 1e-9)) ++in;
+            else if (!vessel->contains(v, -1e-6)) ++out;
+        }
+        if (in > 0 && out > 0)
+            throw SceneError(key + ": the solid crosses the container's wall (" + std::to_string(in) + " of its " +
+                             std::to_string(w.vertices.size()) + " vertices inside, " + std::to_string(out) +
+                             " outside): move it into the vessel or out of it");
+        // No magnet's body inside the solid.
+        const std::unique_ptr<Container> solid = makeContainerWithSolids(ContainerParams{}, {w}, scene.path);
+        for (size_t m = 0; m < scene.magnets.size(); ++m) {
+            const Magnet mag = scene.magnets[m].at(0.0);
+            const MagnetKindInfo& info = magnetKindInfo(mag.kind);
+            if (!info.positioned) continue;
+            std::vector<Vec3d> body{mag.position};
+            const Vec3d axis = mag.direction.norm() > 0 ? Vec3d(mag.direction.normalized()) : Vec3d::UnitZ();
+            if (info.usesLength && !info.usesRadius) {
+                body.push_back(mag.position + 0.5 * mag.length * axis);
+                body.push_back(mag.position - 0.5 * mag.length * axis);
+            }
+            if (info.usesRadius) { // a loop's wire, a coil's winding: points round it
+                body.clear();
+                const Vec3d u = axis.unitOrthogonal(), v = axis.cross(u);
+                const int rows = info.usesLength ? 5 : 1;
+                for (int r = 0; r < rows; ++r)
+                    for (int a = 0; a < 24; ++a) {
+                        const double phi = 2 * kPi * a / 24;
+                        const double z = rows > 1 ? mag.length * (double(r) / (rows - 1) - 0.5) : 0.0;
+                        body.push_back(mag.position + z * axis + mag.radius * (std::cos(phi) * u + std::sin(phi) * v));
+                    }
+            }
+            for (const Vec3d& p : body)
+                if (!solid->contains(p, 0))
+                    throw SceneError(key + ": magnets[" + std::to_string(m) + "] (" + info.name +
+                                     ") lies inside the solid: a magnet and a solid cannot share space; move one of them");
+        }
+        // Some magnet must reach it: the strongest applied field at its vertices over the shot
+        // (a sample a frame, at most 256) of at least 1 A/m (the Earth's field is ~40 A/m).
+        double strongest = 0;
+        const int frames = std::clamp(scene.shot.frameCount(), 1, 256);
+        for (int f = 0; f <= frames && !scene.magnets.empty(); ++f) {
+            const double t = scene.shot.duration * f / frames;
+            std::vector<Magnet> mags;
+            for (const MagnetTrack& tr : scene.magnets) mags.push_back(tr.at(t));
+            for (size_t v = 0; v < w.vertices.size(); v += std::max<size_t>(1, w.vertices.size() / 64))
+                strongest = std::max(strongest, magnetField(mags, w.vertices[v]).norm());
+        }
+        if (!(strongest >= 1.0))
+            throw SceneError(key + ": no magnet reaches the solid (" +
+                             (scene.magnets.empty() ? std::string("the scene has no [[magnets]]")
+                                                    : "the strongest field at it over the shot is " + formatNumber(strongest) + " A/m") +
+                             "): an unmagnetized solid is only a wall; add a magnet or use a mesh container");
+    }
+}
+
 FluidSeed seedFluid(const SimScene& scene, const Container& container) {
     // Before anything is allocated: a typo in a count or spacing must not run for a minute
     // and end in std::bad_alloc.
@@ -127,8 +205,15 @@ FluidSeed seedFluid(const SimScene& scene, const Container& container) {
     // amount of fluid raises its level), so the spacing is found around the bodies too.
     size_t displaced = 0;      // lattice points the bodies took in the last fill
     bool displacedAny = false; // ... in any fill (the bisection's too)
+    // The solids displace the fluid too: a block is filled around them, at least a quarter
+    // spacing off their walls, where the first layer of fluid at a wall sampled on its surface sits.
+    std::unique_ptr<Container> solids;
+    if (!scene.solids.empty()) solids = makeContainerWithSolids(ContainerParams{}, solidWalls(scene), scene.path);
     auto fill = [&](const FluidBlock& b, double spacing) {
         latticeOfBlock(b, spacing, pts);
+        if (solids)
+            pts.erase(std::remove_if(pts.begin(), pts.end(), [&](const Vec3d& p) { return !solids->contains(p, 0.5 * spacing); }),
+                      pts.end());
         if (scene.magnets.empty()) return;
         const std::vector<MagnetObstacle> bodies = magnetObstacles(scene.magnets, 0.0, 0.0, 0.5 * spacing, 0.0);
         if (bodies.empty()) return;

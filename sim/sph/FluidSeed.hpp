@@ -36,4 +36,13 @@ struct FluidSeed {
 /// container or a block that cannot hold its count.
 FluidSeed seedFluid(const SimScene& scene, const Container& container);
 
+/// The scene's solids as walls at time 0 (ferro-sim keeps solids still), meshed at their panel
+/// size, else twice the fluid spacing, else an eighth of their radius (a mesh file keeps its own
+/// triangles; the walls sample themselves at the particle spacing whatever their triangles).
+std::vector<SolidWall> solidWalls(const SimScene& scene);
+/// The scene's solids (`walls`, solidWalls(scene)) where they may stand: each inside the
+/// vessel or outside it but not across its wall, no magnet inside one, and some magnet
+/// reaching each (at least 1 A/m at it during the shot). Throws a one-line SceneError.
+void checkSolids(const SimScene& scene, const std::vector<SolidWall>& walls);
+
 } // namespace ferro

@@ -25,7 +25,10 @@
 namespace ferro {
 
 FluidSimulation::FluidSimulation(const SimScene& scene)
-    : scene_(scene), container_(makeContainer(scene.container, scene.path)) {
+    : scene_(scene) {
+    const std::vector<SolidWall> walls = solidWalls(scene_);
+    checkSolids(scene_, walls);
+    container_ = makeContainerWithSolids(scene_.container, walls, scene_.path);
     FluidSeed seed = seedFluid(scene_, *container_);
     spacing_ = seed.spacing;
     h_ = 2 * spacing_;
