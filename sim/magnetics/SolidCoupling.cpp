@@ -3,12 +3,13 @@
 #include "sim/core/ParticleLoops.hpp"
 #include "sim/particlefield/ParticleField.hpp"
 
+#include <algorithm>
 #include <chrono>
 
 namespace ferro {
 
 SolidCoupling::SolidCoupling(const std::vector<SolidParams>& solids, double spacing, const std::string& where)
-    : solids_(solids) {
+    : solids_(solids), spacing_(spacing) {
     for (const SolidParams& s : solids_) {
         const double edge = s.panelSize > 0 ? s.panelSize : 2.0 * spacing;
         shapes_.push_back(solidShape(s, edge, where));
@@ -43,17 +44,55 @@ SolidCoupling::Stats SolidCoupling::update(double t, const std::vector<Magnet>& 
     st.panels = solver_.panelCount();
     st.iterations = s.iterations;
     st.converged = s.converged;
-    H.resize(x.size());
-    J.resize(x.size());
-    forEachParticle(x.size(), [&](size_t i) {
+    const size_t n = x.size();
+    // Which particles to evaluate in full (see the header): all after a cold start, a new
+    // set of panels or a charge that moved by more than kRecharge; else those that moved.
+    const std::vector<double>& sigma = solver_.charge();
+    bool all = cold || sigmaEvaluated_.size() != sigma.size() || xEval_.size() != n;
+    if (!all) {
+        double d2 = 0, s2 = 0;
+        for (size_t j = 0; j < sigma.size(); ++j) {
+            d2 += (sigma[j] - sigmaEvaluated_[j]) * (sigma[j] - sigmaEvaluated_[j]);
+            s2 += sigmaEvaluated_[j] * sigmaEvaluated_[j];
+        }
+        all = d2 > kRecharge * kRecharge * s2;
+    }
+    if (all) {
+        sigmaEvaluated_ = sigma;
+        xEval_.assign(n, Vec3::Zero());
+        hEval_.assign(n, Vec3::Zero());
+        jEval_.assign(n, Eigen::Matrix3f::Zero());
+    }
+    const Real reach2 = Real(kReevaluate * spacing_ * kReevaluate * spacing_);
+    std::vector<char> evaluated(n, 0);
+    forEachParticle(n, [&](size_t i) {
+        if (!all && (x[i] - xEval_[i]).squaredNorm() <= reach2) return;
         Vec3d h;
         Mat3d g;
         solver_.fieldAndGradient(x[i].cast<double>(), h, g);
-        H[i] = h.allFinite() ? Vec3(h.cast<Real>()) : Vec3(Vec3::Zero());
-        J[i] = g.allFinite() ? Eigen::Matrix3f(g.cast<float>()) : Eigen::Matrix3f(Eigen::Matrix3f::Zero());
+        xEval_[i] = x[i];
+        hEval_[i] = h.allFinite() ? Vec3(h.cast<Real>()) : Vec3(Vec3::Zero());
+        jEval_[i] = g.allFinite() ? Eigen::Matrix3f(g.cast<float>()) : Eigen::Matrix3f(Eigen::Matrix3f::Zero());
+        evaluated[i] = 1;
+    });
+    lastEvaluated_ = size_t(std::count(evaluated.begin(), evaluated.end(), 1));
+    // The charge since the full evaluation changed the field by under kRecharge: the field
+    // carried to each particle's position by its Jacobian.
+    H.resize(n);
+    J.resize(n);
+    forEachParticle(n, [&](size_t i) {
+        H[i] = hEval_[i] + jEval_[i] * (x[i] - xEval_[i]);
+        J[i] = jEval_[i];
     });
     st.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
     return st;
+}
+
+void SolidCoupling::permute(const std::vector<uint32_t>& order) {
+    if (xEval_.size() != order.size()) return;
+    ferro::permute(xEval_, order);
+    ferro::permute(hEval_, order);
+    ferro::permute(jEval_, order);
 }
 
 } // namespace ferro

@@ -13,8 +13,12 @@
 // by the field's drift, so the lag of one solve is within the solve's own tolerance.
 //
 // Cost: one charge solve (GMRES, warm-started within a frame; a dense P x P matrix-vector
-// product an application up to 4,096 panels) and one evaluation of field and gradient at the
-// N particles, O(N P).
+// product an application up to 4,096 panels), and the field at the particles, O(P) a
+// particle. That evaluation is the dear part, so it is redone only where it has gone stale:
+// for every particle when the charge has changed by more than kRecharge since the last full
+// evaluation (and at a frame's first solve), else only for the particles that have moved
+// more than kReevaluate spacings since theirs; the others carry their field to where they are
+// now with their Jacobian, H(x) = H(x_e) + J (x - x_e), second order in the move.
 #include "sim/magnets/MagnetField.hpp"
 #include "sim/magnets/MagnetizationParams.hpp"
 #include "sim/solids/SolidParams.hpp"
@@ -54,6 +58,14 @@ public:
                  bool cold, std::vector<Vec3>& H, std::vector<Eigen::Matrix3f>& J);
 
     const SurfaceChargeSolver& solver() const { return solver_; }
+    /// Reorders the per-particle cache with the simulation's particles.
+    void permute(const std::vector<uint32_t>& order);
+    /// Relative change of the charge (2-norm) that re-evaluates every particle.
+    static constexpr double kRecharge = 1e-3;
+    /// A particle's move since its last evaluation, in spacings, that re-evaluates it.
+    static constexpr double kReevaluate = 0.25;
+    /// Particles evaluated in full by the last update (for the progress line and tests).
+    size_t lastEvaluated() const { return lastEvaluated_; }
 
 private:
     std::vector<SolidParams> solids_;
@@ -61,6 +73,11 @@ private:
     SurfaceChargeSolver solver_;
     double posedTime_ = -1;   // the time the panels were last placed (moving solids re-place)
     bool moving_ = false;
+    double spacing_ = 0;
+    std::vector<double> sigmaEvaluated_;      // the charge of the last full evaluation
+    std::vector<Vec3> xEval_, hEval_;         // per particle: where and what it was evaluated
+    std::vector<Eigen::Matrix3f> jEval_;
+    size_t lastEvaluated_ = 0;
 };
 
 } // namespace ferro

@@ -350,6 +350,22 @@ SurfaceChargeSolver::Stats SurfaceChargeSolver::solve(const std::function<Vec3d(
             break;
         }
     }
+    // The point evaluation's float arrays (fieldAndGradient).
+    origin_ = Vec3d::Zero();
+    for (const Vec3d& c : centroid_) origin_ += c / double(n);
+    pcx_.resize(n);
+    pcy_.resize(n);
+    pcz_.resize(n);
+    pq_.resize(n);
+    preach2_.resize(n);
+    for (size_t j = 0; j < n; ++j) {
+        const Vec3d c = centroid_[j] - origin_;
+        pcx_[j] = float(c.x());
+        pcy_[j] = float(c.y());
+        pcz_[j] = float(c.z());
+        pq_[j] = float(sigma_[j] * area_[j]);
+        preach2_[j] = float(kPointRuleReach * radius_[j] * kPointRuleReach * radius_[j]);
+    }
     return st;
 }
 
@@ -374,41 +390,67 @@ Vec3d SurfaceChargeSolver::field(const Vec3d& x) const { return kInv4Pi * densit
 Mat3d SurfaceChargeSolver::gradient(const Vec3d& x) const { return kInv4Pi * densityGradient(sigma_, x); }
 
 void SurfaceChargeSolver::fieldAndGradient(const Vec3d& x, Vec3d& H, Mat3d& J) const {
-    if (sigma_.size() != centroid_.size()) { // nothing solved: no charge
+    const size_t n = centroid_.size();
+    if (sigma_.size() != n || pq_.size() != n) { // nothing solved: no charge
         H.setZero();
         J.setZero();
         return;
     }
-    // One pass: the far panels (the most) as point charges, field and Jacobian together; the
-    // near ones by their own rules (densityField / densityGradient).
-    Vec3d h = Vec3d::Zero();
-    Mat3d g = Mat3d::Zero();
-    const size_t n = centroid_.size();
+    // Pass 1, branch-free over every panel (float, centroids about origin_): the point-charge
+    // field and Jacobian of the panels beyond kPointRuleReach radii, and a flag for the rest.
+    thread_local std::vector<float> nearFlag;
+    nearFlag.resize(n);
+    const Vec3d xl = x - origin_;
+    const float X = float(xl.x()), Y = float(xl.y()), Z = float(xl.z());
+    float hx = 0, hy = 0, hz = 0, gxx = 0, gyy = 0, gzz = 0, gxy = 0, gxz = 0, gyz = 0;
+    const float* cx = pcx_.data();
+    const float* cy = pcy_.data();
+    const float* cz = pcz_.data();
+    const float* q = pq_.data();
+    const float* reach2 = preach2_.data();
+    float* flag = nearFlag.data();
     for (size_t j = 0; j < n; ++j) {
+        const float dx = X - cx[j], dy = Y - cy[j], dz = Z - cz[j];
+        const float r2 = dx * dx + dy * dy + dz * dz;
+        const bool far = r2 >= reach2[j];
+        flag[j] = far ? 0.0f : 1.0f;
+        const float safe = far ? r2 : 1.0f;
+        const float inv = 1.0f / std::sqrt(safe);
+        const float inv2 = inv * inv;
+        const float w = far ? q[j] * inv2 * inv : 0.0f; // q / r^3
+        hx += w * dx;
+        hy += w * dy;
+        hz += w * dz;
+        const float w3 = 3.0f * w * inv2;
+        gxx += w - w3 * dx * dx;
+        gyy += w - w3 * dy * dy;
+        gzz += w - w3 * dz * dz;
+        gxy -= w3 * dx * dy;
+        gxz -= w3 * dx * dz;
+        gyz -= w3 * dy * dz;
+    }
+    Vec3d h(hx, hy, hz);
+    Mat3d g;
+    g << gxx, gxy, gxz, gxy, gyy, gyz, gxz, gyz, gzz;
+    // Pass 2: the near panels by their closed form (within kPointExactReach radii) or the
+    // 3-point rule.
+    for (size_t j = 0; j < n; ++j) {
+        if (flag[j] == 0.0f) continue;
         const double d = sigma_[j];
         if (d == 0) continue;
-        const Vec3d r = x - centroid_[j];
-        const double r2 = r.squaredNorm();
-        const double reach = kRuleReach * radius_[j];
-        if (r2 < reach * reach) {
-            const double dist = std::sqrt(r2);
-            if (dist < kExactReach * radius_[j]) {
-                h += d * uniformTriangleField(x, corner_[j][0], corner_[j][1], corner_[j][2]);
-                g += d * uniformTriangleGradient(x, corner_[j][0], corner_[j][1], corner_[j][2]);
-            } else {
-                for (const Vec3d& y : rule_[j]) {
-                    const Vec3d ry = x - y;
-                    const double s2 = ry.squaredNorm();
-                    const double inv3 = d * area_[j] / 3.0 / (s2 * std::sqrt(s2));
-                    h += inv3 * ry;
-                    g += inv3 * (Mat3d::Identity() - 3.0 * ry * ry.transpose() / s2);
-                }
-            }
+        const double dist = (x - centroid_[j]).norm();
+        if (dist < kPointExactReach * radius_[j]) {
+            h += d * uniformTriangleField(x, corner_[j][0], corner_[j][1], corner_[j][2]);
+            g += d * uniformTriangleGradient(x, corner_[j][0], corner_[j][1], corner_[j][2]);
             continue;
         }
-        const double inv3 = d * area_[j] / (r2 * std::sqrt(r2));
-        h += inv3 * r;
-        g += inv3 * (Mat3d::Identity() - 3.0 * r * r.transpose() / r2);
+        for (const Vec3d& y : rule_[j]) {
+            const Vec3d ry = x - y;
+            const double s2 = ry.squaredNorm();
+            const double inv3 = d * area_[j] / 3.0 / (s2 * std::sqrt(s2));
+            h += inv3 * ry;
+            g += inv3 * (Mat3d::Identity() - 3.0 * ry * ry.transpose() / s2);
+        }
     }
     H = kInv4Pi * h;
     J = kInv4Pi * g;

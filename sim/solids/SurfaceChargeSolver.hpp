@@ -58,6 +58,11 @@ public:
     /// closed form, closer than kRuleReach the 3-point rule, farther a point charge.
     static constexpr double kExactReach = 4.0;
     static constexpr double kRuleReach = 12.0;
+    /// The same reaches for the field at a point (fieldAndGradient), where the point charge's
+    /// error falls as (radius / distance)^2 of one panel's share and each point sums every
+    /// panel once: tighter, for speed.
+    static constexpr double kPointExactReach = 2.0;
+    static constexpr double kPointRuleReach = 6.0;
     /// Up to this many panels the normal operator is kept as a dense float matrix (64 MB).
     static constexpr size_t kDenseLimit = 4096;
 
@@ -146,6 +151,8 @@ private:
     mutable std::vector<double> tau_, magnitude_; // the interior layer, solved on demand
     mutable bool interiorSolved_ = false;
     Eigen::MatrixXf dense_;                       // the normal operator (P <= kDenseLimit)
+    Vec3d origin_{0, 0, 0};                       // fieldAndGradient's float arrays: centroids
+    std::vector<float> pcx_, pcy_, pcz_, pq_, preach2_; // about origin_, charge, near reach^2
 };
 
 } // namespace ferro

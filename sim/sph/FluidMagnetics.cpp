@@ -371,6 +371,7 @@ void FluidMagnetics::permute(const std::vector<uint32_t>& order) {
         ferro::permute(Hsol_, order);
         ferro::permute(Jsol_, order);
     }
+    if (solids_) solids_->permute(order);
 }
 
 Mat3d FluidMagnetics::appliedGradient(size_t i, const Vec3& x) const {
