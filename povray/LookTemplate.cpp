@@ -21,6 +21,7 @@ std::string lookTemplate()
 //   FerroMagnetCount; if > 0: arrays FerroMagnetKind, FerroMagnetPosition, FerroMagnetDirection
 //   (south -> north), FerroMagnetLength, FerroMagnetRadius, FerroMagnetStrength, and the
 //   objects FerroMagnetsNorth, FerroMagnetsSouth (each only if some magnet has that part).
+//   FerroSolids: the magnetizable solids ([[solids]]), if the scene has any.
 
 // max_trace_level 5: reflections of reflections of reflections; 10 costs about 40 % more time
 // for no visible change on the opaque fluid.
@@ -107,6 +108,13 @@ LookSoftBox(LookC + < 0.5, 2.4,  3.0> * LookR, 1.4 * LookR, 0.7)   // rim, behin
 }
 #declare LookMagnetNorth = texture { pigment { rgb <0.55, 0.05, 0.04> } finish { diffuse 0.7 specular 0.4 roughness 0.01 reflection 0.05 } }
 #declare LookMagnetSouth = texture { pigment { rgb <0.45, 0.47, 0.50> } finish { diffuse 0.5 specular 0.6 roughness 0.005 reflection 0.25 metallic } }
+// Brushed steel for the solids: a metallic grey whose fine streaks run along y (the bumps
+// stretched 40 times along the axis); raise the reflection for polished steel.
+#declare LookSteel = texture {
+  pigment { rgb <0.56, 0.57, 0.59> }
+  normal { bumps 0.04 scale <0.02, 0.8, 0.02> }
+  finish { diffuse 0.45 specular 0.7 roughness 0.008 reflection { 0.2 metallic } metallic }
+}
 
 // ---- The set -----------------------------------------------------------------------------------
 plane { y, FerroFloorLevel texture { LookFloor } }
@@ -134,6 +142,9 @@ plane { y, FerroFloorLevel texture { LookFloor } }
 // ---- Magnets ------------------------------------------------------------------------------------
 #ifdef (FerroMagnetsNorth) object { FerroMagnetsNorth texture { LookMagnetNorth } } #end
 #ifdef (FerroMagnetsSouth) object { FerroMagnetsSouth texture { LookMagnetSouth } } #end
+
+// ---- Solids -------------------------------------------------------------------------------------
+#ifdef (FerroSolids) object { FerroSolids texture { LookSteel } } #end
 
 // ---- The fluid ----------------------------------------------------------------------------------
 #if (FerroMeshTriangles > 0)

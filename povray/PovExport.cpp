@@ -48,13 +48,14 @@ bool writeTextFile(const std::string& path, const std::string& text, bool onlyIf
 PovScene parsePovScene(const SceneDocument& doc, int shotFirst, int shotLast, PovOutput what)
 {
     if (what == PovOutput::ShotAndFrames)
-        return {describeShot(doc, shotFirst, shotLast), parseMagnets(doc)};
+        return {describeShot(doc, shotFirst, shotLast), parseMagnets(doc), parseSolids(doc)};
     // Only what exportFrame uses, so that a [render] or [container] edit does not re-export
     // every frame (scripts/shot.mk stamps the export with exactly the keys read here).
     PovScene scene;
     scene.shot.fps = parseShotFps(doc);
     scene.shot.render = parseRenderFrameParams(doc);
     scene.tracks = parseMagnets(doc);
+    scene.solids = parseSolids(doc);
     return scene;
 }
 
@@ -64,7 +65,8 @@ PovExporter::PovExporter(const SceneDocument& doc, std::string outDir, int shotF
 }
 
 PovExporter::PovExporter(PovScene scene, std::string outDir, PovOutput what)
-    : outDir_(std::move(outDir)), what_(what), shot_(std::move(scene.shot)), tracks_(std::move(scene.tracks))
+    : outDir_(std::move(outDir)), what_(what), shot_(std::move(scene.shot)), tracks_(std::move(scene.tracks)),
+      solids_(std::move(scene.solids)), solidShapes_(solidRenderShapes(solids_, "scene"))
 {
     std::error_code ec;
     fs::create_directories(outDir_, ec);
@@ -117,7 +119,9 @@ void PovExporter::exportFrame(const TriangleMesh& mesh, int frame) const
         time = frame / shot_.fps;
     const std::vector<Magnet> magnets = frameMagnets(mesh, tracks_, time);
     writeTextFile(meshIncludePath(frame), meshInclude(mesh, frame, shot_.render.motionBlur > 1));
-    writeTextFile(magnetIncludePath(frame), magnetInclude(magnets, shot_.render, frame, time));
+    std::string text = magnetInclude(magnets, shot_.render, frame, time);
+    if (!solids_.empty()) text += solidInclude(solids_, solidShapes_, time); // none: the file as before
+    writeTextFile(magnetIncludePath(frame), text);
 }
 
 void PovExporter::exportFrameFile(const std::string& meshPath, int frame) const

@@ -17,7 +17,8 @@
 //                     FerroMeshTriangles, FerroMeshVertices, FerroMeshMin/Max  (per frame)
 //   magnets_NNNN.inc  FerroMagnetCount and, if > 0, arrays FerroMagnetKind/Position/
 //                     Direction/Length/Radius/Strength and the objects FerroMagnetsNorth,
-//                     FerroMagnetsSouth                                          (per frame)
+//                     FerroMagnetsSouth; with [[solids]], FerroSolidCount and
+//                     FerroSolids                                                (per frame)
 //   shot.pov          master scene: scene data as #declares, picks the frame's includes
 //                     from frame_number, includes look.inc       (rewritten on every export)
 //   render.ini        image settings of [render] (size, quality, antialiasing), no animation
@@ -29,6 +30,7 @@
 // text changes, so re-exporting frames does not make finished renders look stale to make.
 #include "povray/RenderParams.hpp"
 #include "sim/magnets/MagnetField.hpp"
+#include "sim/solids/SolidParams.hpp"
 #include "sim/scene/SimParams.hpp"
 #include "sim/core/StageErrors.hpp"
 #include "sim/core/TriangleMesh.hpp"
@@ -121,11 +123,19 @@ std::string lookTemplate();
 /// Returns true if the file was written. Throws PovExportError.
 bool writeTextFile(const std::string& path, const std::string& text, bool onlyIfChanged = false);
 
-/// Everything ferro-pov reads from a scene: the shot and the magnets' tracks.
+/// Everything ferro-pov reads from a scene: the shot, the magnets' tracks and the solids.
 struct PovScene {
     ShotDescription shot;
     std::vector<MagnetTrack> tracks;
+    std::vector<SolidParams> solids;
 };
+
+/// The solids' meshes for rendering (a generated shape at a twelfth of its radius, a mesh
+/// file as it is). Throws SceneError (naming `where`) for a mesh that cannot be used.
+std::vector<ShapeMesh> solidRenderShapes(const std::vector<SolidParams>& solids, const std::string& where);
+/// The solids at `time`, appended to magnets_NNNN.inc: FerroSolidCount and FerroSolids (a
+/// union of a mesh2 each; POV-Ray millimetres, y up).
+std::string solidInclude(const std::vector<SolidParams>& solids, const std::vector<ShapeMesh>& shapes, double time);
 
 /// What an export writes: the shot files and the frame includes, or the frame includes only
 /// (mesh_NNNN.inc, magnets_NNNN.inc), which need only the frame rate, the magnets' tracks and
@@ -169,6 +179,8 @@ private:
     PovOutput what_;
     ShotDescription shot_;
     std::vector<MagnetTrack> tracks_;
+    std::vector<SolidParams> solids_;
+    std::vector<ShapeMesh> solidShapes_;
 };
 
 } // namespace ferro

@@ -375,3 +375,51 @@ TEST_CASE("motion blur: each sub-frame is the mesh moved along its velocity over
     CHECK_FALSE(fs::exists(dir / "average.pov"));
     CHECK(slurp(dir / "mesh_0002.inc").find("FerroShift") == std::string::npos);
 }
+
+TEST_CASE("a solid is drawn in brushed steel where it stands, and a scene without solids is unchanged", "[pov][povray][solids]")
+{
+    const fs::path dir = freshDir("solid");
+    // A steel cylinder standing right of the dish's centre, taller than the (empty) fluid.
+    const std::string magnets = R"(
+[[magnets]]
+kind = "coil"
+position = [0.0, 0.0, -0.03]
+radius = 0.02
+length = 0.02
+turns = 200
+current = 2.0
+)";
+    const SceneDocument doc = SceneDocument::parse(dishScene(magnets + R"(
+[[solids]]
+shape = "cylinder"
+radius = 0.008
+height = 0.03
+position = [0.025, 0.0, 0.0]
+)"),
+                                                   (dir / "scene.toml").string());
+    const PovExporter exporter(doc, dir.string());
+    exporter.writeShotFiles(false);
+    exporter.exportFrame(TriangleMesh{}, 0);
+    const std::string inc = slurp(dir / "magnets_0000.inc");
+    CHECK(inc.find("#declare FerroSolidCount = 1;") != std::string::npos);
+    CHECK(inc.find("#declare FerroSolids = union {") != std::string::npos);
+    CHECK(slurp(dir / "look.inc").find("object { FerroSolids texture { LookSteel } }") != std::string::npos);
+    const int W = 96, H = 72;
+    const Result res = renderFrame(dir, 0, W, H, "frame");
+    INFO(res.output);
+    REQUIRE(res.code == 0);
+    const Image img = readPpm(dir / "frame.ppm");
+    // Halfway up the cylinder's axis: grey steel, and its mirror image left of the centre is the set.
+    const RenderParams render = exporter.shot().render;
+    const auto [col, row] = project(render, Vec3d(0.025, 0.0, 0.015), W, H);
+    const auto [mcol, mrow] = project(render, Vec3d(-0.025, 0.0, 0.015), W, H);
+    INFO("steel at " << col << ", " << row << ": " << img.brightness(col, row, 1) << "; mirror " << img.brightness(mcol, mrow, 1));
+    CHECK(img.brightness(col, row, 1) > 0.08);
+    CHECK(std::abs(img.brightness(col, row, 1) - img.brightness(mcol, mrow, 1)) > 0.03);
+
+    // The same scene without the solid: no solid lines in the include at all.
+    const fs::path plain = freshDir("solid_plain");
+    const PovExporter plainExporter(SceneDocument::parse(dishScene(magnets), (plain / "scene.toml").string()), plain.string());
+    plainExporter.exportFrame(TriangleMesh{}, 0);
+    CHECK(slurp(plain / "magnets_0000.inc").find("FerroSolid") == std::string::npos);
+}
