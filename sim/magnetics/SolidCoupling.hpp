@@ -13,7 +13,7 @@
 // by the field's drift, so the lag of one solve is within the solve's own tolerance.
 //
 // Cost: one charge solve (GMRES, warm-started within a frame; a dense P x P matrix-vector
-// product an application up to 4,096 panels), and the field at the particles, O(P) a
+// product an application up to 6,144 panels), and the field at the particles, O(P) a
 // particle. That evaluation is the dear part, so it is redone only where it has gone stale:
 // for every particle when the charge has changed by more than kRecharge since the last full
 // evaluation (and at a frame's first solve), else only for the particles that have moved

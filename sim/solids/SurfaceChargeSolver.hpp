@@ -63,8 +63,8 @@ public:
     /// panel once: tighter, for speed.
     static constexpr double kPointExactReach = 2.0;
     static constexpr double kPointRuleReach = 6.0;
-    /// Up to this many panels the normal operator is kept as a dense float matrix (64 MB).
-    static constexpr size_t kDenseLimit = 4096;
+    /// Up to this many panels the normal operator is kept as a dense float matrix (151 MB).
+    static constexpr size_t kDenseLimit = 6144;
 
     struct Params {
         double tolerance = 1e-8;   ///< GMRES stops at |residual| <= tolerance |rhs| (2-norms)
@@ -92,8 +92,15 @@ public:
     /// cold solve to the tolerance, not to the last bit (a resumed run starts cold, so the
     /// caller makes every frame's first solve cold).
     Stats solve(const std::function<Vec3d(const Vec3d&)>& applied);
-    /// Forgets the last charge as the next solve's start.
-    void coldStart() { sigma_.clear(); }
+    /// Forgets the last charge (and the saturation's secants) as the next solve's start.
+    void coldStart() {
+        sigma_.clear();
+        chi_.clear();
+        secantField_.clear();
+    }
+    /// Relative change (2-norm) of the applied normal field at the panels since the
+    /// saturation's secants were fitted that fits them again.
+    static constexpr double kSecantRefresh = 0.02;
 
     /// The solids' own field H_s [A/m] at x [m] outside every solid (inside it is H_s too,
     /// but that is the cancelling part; use interiorField there).
@@ -148,6 +155,7 @@ private:
     std::vector<uint32_t> nearStart_, nearIndex_;
     std::vector<Vec3d> nearField_;
     std::vector<double> sigma_, chi_;
+    std::vector<double> secantField_;             // H0 . n at the secants' last fit
     mutable std::vector<double> tau_, magnitude_; // the interior layer, solved on demand
     mutable bool interiorSolved_ = false;
     Eigen::MatrixXf dense_;                       // the normal operator (P <= kDenseLimit)

@@ -151,3 +151,38 @@ TEST_CASE("a magnetized sphere matches the analytic field at mu_r 10 and 1000, c
 TEST_CASE("the sphere's convergence table to 20,480 panels", "[.figures][solids]") {
     sphereTable({0.005, 0.0025, 0.0012, 0.0006}, false);
 }
+
+TEST_CASE("a saturating sphere: M bounded by Ms, the uniform solution of H = H0 - M/3 with Froehlich-Kennelly M(H)", "[solids]") {
+    // Soft iron (mu_r 2000, Ms 1.6e6 A/m) in fields from well below to far beyond saturation.
+    // A uniformly magnetized sphere has no volume charge, so the surface-charge model is exact:
+    // H_in = H0 - M / 3, M = chi H_in / (1 + chi H_in / Ms), solved here by bisection on M.
+    const double a = 0.01, mu = 2000, Ms = 1.6e6, chi = mu - 1;
+    const ShapeMesh mesh = makeSphere(a, 0.0025);
+    SolidSurface s;
+    s.vertices = mesh.vertices;
+    s.triangles = mesh.triangles;
+    s.permeability = mu;
+    s.saturation = Ms;
+    for (double H0 : {1e4, 1e6, 1e7}) {
+        double lo = 0, hi = Ms;
+        for (int it = 0; it < 200; ++it) {
+            const double M = 0.5 * (lo + hi), H = H0 - M / 3;
+            (chi * H / (1 + chi * std::abs(H) / Ms) > M ? lo : hi) = M;
+        }
+        const double Mref = 0.5 * (lo + hi);
+        SurfaceChargeSolver solver;
+        solver.setSurfaces({s});
+        const SurfaceChargeSolver::Stats st = solver.solve([&](const Vec3d&) { return Vec3d(0, 0, H0); });
+        // The moment from the field far away: m = 4 pi a^3 M / 3 along z.
+        const Vec3d x(0, 0, 5 * a);
+        const double m = solver.field(x).z() * 2 * kPi * std::pow(5 * a, 3);
+        const double Mfar = m / (4.0 / 3.0 * kPi * a * a * a);
+        double Mmax = 0;
+        for (double v : solver.magnetizationMagnitude()) Mmax = std::max(Mmax, v);
+        INFO("H0 " << H0 << ": M " << Mfar << " from the far field, panels' largest |M| " << Mmax << ", exact " << Mref
+                   << ", secant steps " << st.secantSteps);
+        CHECK(Mfar == Approx(Mref).epsilon(0.02));
+        CHECK(Mmax < 1.03 * Ms); // bounded: the secants' fixed point is under Ms, their last step within 3 %
+        CHECK(st.secantSteps < 30);
+    }
+}
