@@ -92,9 +92,10 @@ public:
     /// cold solve to the tolerance, not to the last bit (a resumed run starts cold, so the
     /// caller makes every frame's first solve cold).
     Stats solve(const std::function<Vec3d(const Vec3d&)>& applied);
-    /// Forgets the last charge (and the saturation's secants) as the next solve's start.
+    /// Forgets the last charge (the interior layer, the saturation's secants) as the next solve's start.
     void coldStart() {
         sigma_.clear();
+        tau_.clear(); // the interior layer warm-starts too
         chi_.clear();
         secantField_.clear();
     }

@@ -235,11 +235,11 @@ void FluidMagnetics::update(double t, const std::vector<Vec3>& x, const SurfaceP
     H_.resize(n, Vec3::Zero());
     M_.resize(n, Vec3::Zero());
     Hind_.resize(n, Vec3::Zero());
-    // The solids' field rides with the particles between solves (refreshed at each solve).
-    if (solids_ && Hsol_.size() != n) updateSolids(x, {}, true);
+    // The solids' field rides with the particles between solves (refreshed at each solve;
+    // none before the first, which a resumed run's first step always is).
     forEachParticle(n, [&](size_t i) {
         Hext_[i] = magnetField(magnets_, x[i].cast<double>()).cast<Real>();
-        if (solids_) Hext_[i] += Hsol_[i];
+        if (Hsol_.size() == n) Hext_[i] += Hsol_[i];
     });
     ++stats_.steps;
     auto largest = [&](const std::vector<Vec3>& field) {
@@ -251,8 +251,8 @@ void FluidMagnetics::update(double t, const std::vector<Vec3>& x, const SurfaceP
             },
             [](Real a, Real b) { return std::max(a, b); })));
     };
-    maxFieldSeen_ = std::max(maxFieldSeen_, largest(Hext_));
     if (!magnetic()) {
+        maxFieldSeen_ = std::max(maxFieldSeen_, largest(Hext_));
         H_ = Hext_;
         std::fill(M_.begin(), M_.end(), Vec3::Zero());
         kelvin_.clear();
@@ -266,7 +266,11 @@ void FluidMagnetics::update(double t, const std::vector<Vec3>& x, const SurfaceP
     const bool solving = forceSolve || solveIsStale();
     if (solving) {
         solve(x, surfaceOnce, forceSolve);
-    } else {
+    }
+    // After the solve, which refreshes the solids' part of the applied field: a resumed run,
+    // which has no solids' field before its first solve, then sees the same largest field.
+    maxFieldSeen_ = std::max(maxFieldSeen_, largest(Hext_));
+    if (!solving) {
         // Between solves: the cached induced field, the current applied field, the law.
         // The induced field is proportional to M, which follows the applied field: the
         // cache is scaled with the applied field's RMS strength (inducedScale_, exact for
