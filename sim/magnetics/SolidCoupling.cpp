@@ -49,13 +49,32 @@ SolidCoupling::Stats SolidCoupling::update(double t, const std::vector<Magnet>& 
     // set of panels or a charge that moved by more than kRecharge; else those that moved.
     const std::vector<double>& sigma = solver_.charge();
     bool all = cold || sigmaEvaluated_.size() != sigma.size() || xEval_.size() != n;
+    // The charge's change along its evaluated pattern scales the evaluated fields (the field
+    // is linear in the charge: a ramping current changes the scale, not the pattern); what
+    // is left beyond kRecharge re-evaluates every particle.
+    double scale = 1;
     if (!all) {
-        double d2 = 0, s2 = 0;
+        double along = 0, s2 = 0;
         for (size_t j = 0; j < sigma.size(); ++j) {
-            d2 += (sigma[j] - sigmaEvaluated_[j]) * (sigma[j] - sigmaEvaluated_[j]);
+            along += sigma[j] * sigmaEvaluated_[j];
             s2 += sigmaEvaluated_[j] * sigmaEvaluated_[j];
         }
-        all = d2 > kRecharge * kRecharge * s2;
+        scale = s2 > 0 ? along / s2 : 1.0;
+        double d2 = 0, n2 = 0;
+        for (size_t j = 0; j < sigma.size(); ++j) {
+            const double d = sigma[j] - scale * sigmaEvaluated_[j];
+            d2 += d * d;
+            n2 += sigma[j] * sigma[j];
+        }
+        all = !(s2 > 0) || d2 > kRecharge * kRecharge * n2;
+    }
+    if (!all && scale != 1) {
+        const Real f = Real(scale);
+        forEachParticle(n, [&](size_t i) {
+            hEval_[i] *= f;
+            jEval_[i] *= f;
+        });
+        for (double& v : sigmaEvaluated_) v *= scale;
     }
     if (all) {
         sigmaEvaluated_ = sigma;

@@ -16,9 +16,10 @@
 // product an application up to 6,144 panels), and the field at the particles, O(P) a
 // particle. That evaluation is the dear part, so it is redone only where it has gone stale:
 // for every particle when the charge has changed by more than kRecharge since the last full
-// evaluation (and at a frame's first solve), else only for the particles that have moved
-// more than kReevaluate spacings since theirs; the others carry their field to where they are
-// now with their Jacobian, H(x) = H(x_e) + J (x - x_e), second order in the move.
+// evaluation beyond a change of scale (a current ramping: the evaluated fields are scaled
+// with it), and at a frame's first solve; else only for the particles that have moved more
+// than kReevaluate spacings since theirs; the others carry their field to where they are now
+// with their Jacobian, H(x) = H(x_e) + J (x - x_e), second order in the move.
 #include "sim/magnets/MagnetField.hpp"
 #include "sim/magnets/MagnetizationParams.hpp"
 #include "sim/solids/SolidParams.hpp"

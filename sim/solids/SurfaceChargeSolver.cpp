@@ -151,6 +151,7 @@ void SurfaceChargeSolver::setSurfaces(const std::vector<SolidSurface>& surfaces)
     tau_.clear();
     chi_ = chi0_;
     secantField_.clear();
+    lastField_.clear();
     magnitude_.assign(n, 0.0);
     interiorSolved_ = false;
     // The normal operator as a dense float matrix when it fits (kDenseLimit panels, 151 MB):
@@ -331,6 +332,18 @@ SurfaceChargeSolver::Stats SurfaceChargeSolver::solve(const std::function<Vec3d(
         due = d2 > kSecantRefresh * kSecantRefresh * s2;
     }
     if (chi_.size() != n) chi_ = chi0_;
+    // The warm start scaled by the applied field's change along its last pattern: a coil's
+    // current ramping up or down (the charge is linear in it) then starts at the answer.
+    if (sigma_.size() == n && lastField_.size() == n) {
+        double along = 0, last2 = 0;
+        for (size_t i = 0; i < n; ++i) {
+            along += h0n[i] * lastField_[i];
+            last2 += lastField_[i] * lastField_[i];
+        }
+        if (last2 > 0)
+            for (double& v : sigma_) v *= along / last2;
+    }
+    lastField_ = h0n;
     std::vector<double> lambda(n), rhs(n);
     for (int step = 0;; ++step) {
         for (size_t i = 0; i < n; ++i) {

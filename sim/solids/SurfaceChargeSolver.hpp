@@ -67,7 +67,9 @@ public:
     static constexpr size_t kDenseLimit = 6144;
 
     struct Params {
-        double tolerance = 1e-8;   ///< GMRES stops at |residual| <= tolerance |rhs| (2-norms)
+        /// GMRES stops at |residual| <= tolerance |rhs| (2-norms): far below the fluid's
+        /// magnetization tolerance (1e-2), and the sphere's errors (tests) are the panels'.
+        double tolerance = 1e-6;
         int maxIterations = 400;   ///< operator applications per linear solve
         int saturationSteps = 30;  ///< most secant updates with a saturation
     };
@@ -96,6 +98,7 @@ public:
     void coldStart() {
         sigma_.clear();
         tau_.clear(); // the interior layer warm-starts too
+        lastField_.clear();
         chi_.clear();
         secantField_.clear();
     }
@@ -157,6 +160,7 @@ private:
     std::vector<Vec3d> nearField_;
     std::vector<double> sigma_, chi_;
     std::vector<double> secantField_;             // H0 . n at the secants' last fit
+    std::vector<double> lastField_;               // H0 . n of the last solve (the warm start's scale)
     mutable std::vector<double> tau_, magnitude_; // the interior layer, solved on demand
     mutable bool interiorSolved_ = false;
     Eigen::MatrixXf dense_;                       // the normal operator (P <= kDenseLimit)
