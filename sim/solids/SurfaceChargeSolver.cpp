@@ -352,6 +352,15 @@ SurfaceChargeSolver::Stats SurfaceChargeSolver::solve(const std::function<Vec3d(
         }
         double res = 0;
         st.iterations += solveLayer(0.5, lambda, rhs, sigma_, res);
+        // A body's net charge is zero (div B = 0); the flat panels' quadrature leaves ~1 % of
+        // its charge as a net monopole (a cone in a coil's field), whose 1/r^2 field would
+        // outlast the dipole far away: removed as a uniform density.
+        {
+            std::vector<double> total(bodyArea_.size(), 0.0);
+            for (size_t i = 0; i < n; ++i) total[body_[i]] += area_[i] * sigma_[i];
+            for (size_t i = 0; i < n; ++i)
+                if (bodyArea_[body_[i]] > 0) sigma_[i] -= total[body_[i]] / bodyArea_[body_[i]];
+        }
         st.residual = res;
         st.converged = st.converged && res <= params_.tolerance * 1.0001;
         interiorSolved_ = false;
