@@ -8,9 +8,9 @@
 // alternate (block Gauss-Seidel), staggered in time: at each self-consistent solve of the
 // fluid (sim/sph/FluidMagnetics), the solids are solved first in the magnets' field plus the
 // field of the fluid's magnetization from the previous solve, then the fluid in the magnets'
-// field plus the solids'. The fluid's field at the panels is a small share of the magnets'
-// (chi of a ferrofluid ~1 against the iron's 1000), and the interval between solves is set
-// by the field's drift, so the lag of one solve is within the solve's own tolerance.
+// field plus the solids'. The interval between solves is set by the field's drift
+// (FluidMagnetics), which includes the solids' share, so the lag is one solve's drift; how
+// far the staggered pair is from the simultaneous solution has not been measured yet.
 //
 // Cost: one charge solve (GMRES, warm-started within a frame; a dense P x P matrix-vector
 // product an application up to 6,144 panels), and the field at the particles, O(P) a
@@ -19,7 +19,7 @@
 // evaluation beyond a change of scale (a current ramping: the evaluated fields are scaled
 // with it), and at a frame's first solve; else only for the particles that have moved more
 // than kReevaluate spacings since theirs; the others carry their field to where they are now
-// with their Jacobian, H(x) = H(x_e) + J (x - x_e), second order in the move.
+// with their Jacobian, H(x) = H(x_e) + J (x - x_e), an error second order in the move.
 #include "sim/magnets/MagnetField.hpp"
 #include "sim/magnets/MagnetizationParams.hpp"
 #include "sim/solids/SolidParams.hpp"

@@ -30,11 +30,16 @@
 // charge solved again until the secants settle).
 //
 // Discretization: a flat panel per triangle, sigma and tau constant on it, collocation at
-// the centroid. A panel's field is its closed form (PanelIntegral.hpp) within
-// kExactReach panel radii, a 3-point rule (degree 2) within kRuleReach, and a point charge
-// at the centroid beyond. Convergence with the panel count: tests/sim/solids.
+// the centroid. In the solve a panel's field is its closed form (PanelIntegral.hpp) within
+// kExactReach panel radii, averaged over the target panel's 3-point rule; a 3-point rule
+// (degree 2) within kRuleReach; a point charge at the centroid beyond; and each panel adds
+// the curved surface's own term its flat shape lacks (curvatureTerms in the .cpp). The
+// normal operator is kept as a dense float matrix up to kDenseLimit panels. The field at a
+// point (fieldAndGradient, the particles' path) uses the tighter kPoint* reaches in one
+// float pass. Convergence with the panel count: tests/sim/solids.
 //
-// Units: SI (m, A/m); double precision throughout (a few thousand panels).
+// Units: SI (m, A/m); double precision, except the dense operator and the point pass (float:
+// the fluid's field tolerance is 1e-2).
 #include "sim/solids/PanelIntegral.hpp"
 
 #include <Eigen/Core>
@@ -113,7 +118,9 @@ public:
     Vec3d field(const Vec3d& x) const;
     /// dH_s/dx [A/m^2] at x, outside the solids.
     Mat3d gradient(const Vec3d& x) const;
-    /// field() and gradient() at x in one pass over the panels.
+    /// The field and its Jacobian at x in one float pass over the panels with the tighter
+    /// kPoint* reaches: the particles' path, as accurate as field() on a sphere (0.2-0.3 %,
+    /// the Jacobian within 0.7 % of the dipole's; tests/sim/solids). Zero before a solve.
     void fieldAndGradient(const Vec3d& x, Vec3d& H, Mat3d& J) const;
     /// The total field H [A/m] at x inside a solid (applied plus own), from the interior layer.
     Vec3d interiorField(const Vec3d& x) const;
