@@ -226,6 +226,12 @@ void runShot(const SimScene& scene, const RunOptions& opt) {
                     std::snprintf(buf, sizeof buf, " NOT CONVERGED (residual %.1e > tolerance/10)", fm->stats().residual);
                     mag += buf;
                 }
+                if (fm->stats().solidPanels > 0) { // [[solids]]: their charge solve and its cost this frame
+                    std::snprintf(buf, sizeof buf, "  solids %zu panels (%d it, %.1f s)%s", fm->stats().solidPanels,
+                                  fm->stats().solidIterations, fm->stats().solidSeconds,
+                                  fm->stats().solidConverged ? "" : " NOT CONVERGED");
+                    mag += buf;
+                }
             }
             if (const SolverCapCount& caps = sim.frameSolverCaps(); caps.atCap() > 0) {
                 // Steps whose pressure solve stopped at its cap above the tolerance.

@@ -390,7 +390,7 @@ void FluidMagnetics::updateSolids(const std::vector<Vec3>& x, const std::vector<
     stats_.solidPanels = st.panels;
     stats_.solidIterations = st.iterations;
     stats_.solidSeconds += st.seconds;
-    stats_.converged = stats_.converged && st.converged;
+    stats_.solidConverged = stats_.solidConverged && st.converged;
 }
 
 std::optional<FluidMagnetics::CurveMemory> FluidMagnetics::curveMemory() const {

@@ -54,6 +54,7 @@ struct MagneticsStats {
     size_t solidPanels = 0;  ///< panels of the magnetized solids (0: none)
     int solidIterations = 0; ///< GMRES applications of the solids' last charge solve
     double solidSeconds = 0; ///< time spent on the solids since the reset [s]
+    bool solidConverged = true; ///< every charge solve since the reset reached its tolerance
 };
 
 class FluidMagnetics {
@@ -139,6 +140,7 @@ public:
         stats_.converged = true;
         stats_.residual = 0;
         stats_.solidSeconds = 0;
+        stats_.solidConverged = true;
     }
     const MagnetizationParams& law() const { return law_; }
 
