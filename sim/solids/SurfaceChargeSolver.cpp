@@ -154,6 +154,22 @@ void SurfaceChargeSolver::setSurfaces(const std::vector<SolidSurface>& surfaces)
     lastField_.clear();
     magnitude_.assign(n, 0.0);
     interiorSolved_ = false;
+    // fieldAndGradient's float arrays: centroids about their mean (float keeps its digits
+    // there) and each panel's near reach; the charges follow each solve.
+    origin_ = Vec3d::Zero();
+    for (const Vec3d& c : centroid_) origin_ += c / double(n);
+    pcx_.resize(n);
+    pcy_.resize(n);
+    pcz_.resize(n);
+    preach2_.resize(n);
+    for (size_t j = 0; j < n; ++j) {
+        const Vec3d c = centroid_[j] - origin_;
+        pcx_[j] = float(c.x());
+        pcy_[j] = float(c.y());
+        pcz_[j] = float(c.z());
+        preach2_[j] = float(kPointRuleReach * radius_[j] * kPointRuleReach * radius_[j]);
+    }
+    pq_.clear(); // no charge until a solve
     // The normal operator as a dense float matrix when it fits (kDenseLimit panels, 151 MB):
     // a GMRES step is then a matrix-vector product instead of the O(P^2) pair sweep.
     dense_.resize(0, 0);
@@ -218,31 +234,10 @@ Vec3d SurfaceChargeSolver::densityField(const std::vector<double>& d, const Vec3
     return h;
 }
 
-Mat3d SurfaceChargeSolver::densityGradient(const std::vector<double>& d, const Vec3d& x) const {
-    Mat3d J = Mat3d::Zero();
-    if (d.size() != centroid_.size()) return J; // nothing solved: no charge
-    const Mat3d I3 = Mat3d::Identity();
-    for (size_t j = 0; j < centroid_.size(); ++j) {
-        if (d[j] == 0) continue;
-        const Vec3d r = x - centroid_[j];
-        const double dist = r.norm();
-        if (dist < kExactReach * radius_[j]) {
-            J += d[j] * uniformTriangleGradient(x, corner_[j][0], corner_[j][1], corner_[j][2]);
-            continue;
-        }
-        // d/dx of q r / |r|^3 = q (I / |r|^3 - 3 r r^T / |r|^5).
-        auto point = [&](const Vec3d& ry, double q) {
-            const double r2 = ry.squaredNorm();
-            const double inv3 = 1.0 / (r2 * std::sqrt(r2));
-            J += q * inv3 * (I3 - 3.0 * ry * ry.transpose() / r2);
-        };
-        if (dist < kRuleReach * radius_[j]) {
-            for (const Vec3d& y : rule_[j]) point(x - y, d[j] * area_[j] / 3.0);
-        } else {
-            point(r, d[j] * area_[j]);
-        }
-    }
-    return J;
+std::vector<double> SurfaceChargeSolver::bodyCharges(const std::vector<double>& d) const {
+    std::vector<double> total(bodyArea_.size(), 0.0);
+    for (size_t i = 0; i < d.size(); ++i) total[body_[i]] += area_[i] * d[i];
+    return total;
 }
 
 void SurfaceChargeSolver::normalField(const std::vector<double>& d, std::vector<double>& out) const {
@@ -267,9 +262,7 @@ int SurfaceChargeSolver::solveLayer(double diag, const std::vector<double>& lamb
     std::vector<double> tmp(n), Fn;
     auto apply = [&](const std::vector<double>& v, Eigen::VectorXd& out) {
         normalField(v, Fn);
-        // Each body's total charge (the deflation of its conductor mode).
-        std::vector<double> total(bodyArea_.size(), 0.0);
-        for (size_t i = 0; i < n; ++i) total[body_[i]] += area_[i] * v[i];
+        const std::vector<double> total = bodyCharges(v); // the deflation of each conductor mode
         out.resize(Eigen::Index(n));
         for (size_t i = 0; i < n; ++i) {
             const double b = bodyArea_[body_[i]];
@@ -355,12 +348,9 @@ SurfaceChargeSolver::Stats SurfaceChargeSolver::solve(const std::function<Vec3d(
         // A body's net charge is zero (div B = 0); the flat panels' quadrature leaves ~1 % of
         // its charge as a net monopole (a cone in a coil's field), whose 1/r^2 field would
         // outlast the dipole far away: removed as a uniform density.
-        {
-            std::vector<double> total(bodyArea_.size(), 0.0);
-            for (size_t i = 0; i < n; ++i) total[body_[i]] += area_[i] * sigma_[i];
-            for (size_t i = 0; i < n; ++i)
-                if (bodyArea_[body_[i]] > 0) sigma_[i] -= total[body_[i]] / bodyArea_[body_[i]];
-        }
+        const std::vector<double> total = bodyCharges(sigma_);
+        for (size_t i = 0; i < n; ++i)
+            if (bodyArea_[body_[i]] > 0) sigma_[i] -= total[body_[i]] / bodyArea_[body_[i]];
         st.residual = res;
         st.converged = st.converged && res <= params_.tolerance * 1.0001;
         interiorSolved_ = false;
@@ -386,22 +376,9 @@ SurfaceChargeSolver::Stats SurfaceChargeSolver::solve(const std::function<Vec3d(
             break;
         }
     }
-    // The point evaluation's float arrays (fieldAndGradient).
-    origin_ = Vec3d::Zero();
-    for (const Vec3d& c : centroid_) origin_ += c / double(n);
-    pcx_.resize(n);
-    pcy_.resize(n);
-    pcz_.resize(n);
+    // The charges of fieldAndGradient's float pass.
     pq_.resize(n);
-    preach2_.resize(n);
-    for (size_t j = 0; j < n; ++j) {
-        const Vec3d c = centroid_[j] - origin_;
-        pcx_[j] = float(c.x());
-        pcy_[j] = float(c.y());
-        pcz_[j] = float(c.z());
-        pq_[j] = float(sigma_[j] * area_[j]);
-        preach2_[j] = float(kPointRuleReach * radius_[j] * kPointRuleReach * radius_[j]);
-    }
+    for (size_t j = 0; j < n; ++j) pq_[j] = float(sigma_[j] * area_[j]);
     return st;
 }
 
@@ -422,8 +399,6 @@ int SurfaceChargeSolver::solveInterior() const {
 }
 
 Vec3d SurfaceChargeSolver::field(const Vec3d& x) const { return kInv4Pi * densityField(sigma_, x); }
-
-Mat3d SurfaceChargeSolver::gradient(const Vec3d& x) const { return kInv4Pi * densityGradient(sigma_, x); }
 
 void SurfaceChargeSolver::fieldAndGradient(const Vec3d& x, Vec3d& H, Mat3d& J) const {
     const size_t n = centroid_.size();

@@ -116,8 +116,6 @@ public:
     /// The solids' own field H_s [A/m] at x [m] outside every solid (inside it is H_s too,
     /// but that is the cancelling part; use interiorField there).
     Vec3d field(const Vec3d& x) const;
-    /// dH_s/dx [A/m^2] at x, outside the solids.
-    Mat3d gradient(const Vec3d& x) const;
     /// The field and its Jacobian at x in one float pass over the panels with the tighter
     /// kPoint* reaches: the particles' path, as accurate as field() on a sphere (0.2-0.3 %,
     /// the Jacobian within 0.7 % of the dipole's; tests/sim/solids). Zero before a solve.
@@ -145,7 +143,8 @@ private:
     void collocationField(const std::vector<double>& d, std::vector<Vec3d>& out) const;
     // The field of density d at an arbitrary point, without 1/(4 pi).
     Vec3d densityField(const std::vector<double>& d, const Vec3d& x) const;
-    Mat3d densityGradient(const std::vector<double>& d, const Vec3d& x) const;
+    // Each body's total charge of the density d (area-weighted sum over its panels).
+    std::vector<double> bodyCharges(const std::vector<double>& d) const;
     // The normal component of collocationField (the dense matrix when there is one).
     void normalField(const std::vector<double>& d, std::vector<double>& out) const;
     // The interior layer tau and the panels' |M| for the current sigma (once per solve).

@@ -191,7 +191,7 @@ void checkSolids(const SimScene& scene, const std::vector<SolidWall>& walls) {
     }
 }
 
-FluidSeed seedFluid(const SimScene& scene, const Container& container) {
+FluidSeed seedFluid(const SimScene& scene, const Container& container, const std::vector<SolidWall>& walls) {
     // Before anything is allocated: a typo in a count or spacing must not run for a minute
     // and end in std::bad_alloc.
     checkRunSize(scene);
@@ -208,7 +208,7 @@ FluidSeed seedFluid(const SimScene& scene, const Container& container) {
     // The solids displace the fluid too: a block is filled around them, at least a quarter
     // spacing off their walls, where the first layer of fluid at a wall sampled on its surface sits.
     std::unique_ptr<Container> solids;
-    if (!scene.solids.empty()) solids = makeContainerWithSolids(ContainerParams{}, solidWalls(scene), scene.path);
+    if (!walls.empty()) solids = makeContainerWithSolids(ContainerParams{}, walls, scene.path);
     auto fill = [&](const FluidBlock& b, double spacing) {
         latticeOfBlock(b, spacing, pts);
         if (solids)

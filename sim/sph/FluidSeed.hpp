@@ -34,7 +34,8 @@ struct FluidSeed {
 };
 /// Fills the scene's blocks; throws SceneError naming the block for fluid outside the
 /// container or a block that cannot hold its count.
-FluidSeed seedFluid(const SimScene& scene, const Container& container);
+/// `walls`: the scene's solids (solidWalls(scene)), which the blocks are filled around.
+FluidSeed seedFluid(const SimScene& scene, const Container& container, const std::vector<SolidWall>& walls = {});
 
 /// The scene's solids as walls at time 0 (ferro-sim keeps solids still), meshed at their panel
 /// size, else twice the fluid spacing, else an eighth of their radius (a mesh file keeps its own

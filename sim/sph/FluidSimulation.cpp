@@ -29,7 +29,7 @@ FluidSimulation::FluidSimulation(const SimScene& scene)
     const std::vector<SolidWall> walls = solidWalls(scene_);
     checkSolids(scene_, walls);
     container_ = makeContainerWithSolids(scene_.container, walls, scene_.path);
-    FluidSeed seed = seedFluid(scene_, *container_);
+    FluidSeed seed = seedFluid(scene_, *container_, walls);
     spacing_ = seed.spacing;
     h_ = 2 * spacing_;
     kernel_ = CubicSplineKernel(Real(h_));
