@@ -27,7 +27,7 @@ int main(int argc, char** argv)
     int frame = -1, threads = 0;
     bool forceTemplate = false, noShot = false, quiet = false, printInputs = false;
     app.add_option("mesh", input, "mesh file (PLY, OBJ, ...), or a pattern with {:04} / %04d together with --frames");
-    app.add_option("--scene,-s", scenePath, "scene file (TOML): [render], [container], [shot], [[magnets]]")->required();
+    app.add_option("--scene,-s", scenePath, "scene file (TOML): [render], [container], [shot], [[magnets]], [[solids]]")->required();
     auto* outOpt = app.add_option("--out,-o", outDir, "shot directory");
     addSceneInputsFlag(app, printInputs, {outOpt});
     auto* frameOpt = app.add_option("--frame", frame, "frame number of a single mesh (default: the mesh's `comment frame`)")
