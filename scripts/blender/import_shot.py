@@ -12,9 +12,17 @@ which also rides in the .blend as a registered text block (Blender runs it on lo
 point attribute "velocity", which Cycles' motion blur reads for meshes whose topology changes
 from frame to frame. Ferro's coordinates are Blender's: metres, z up.
 
+A shot with magnetizable solids ([[solids]]) also gets the object "FerroSolids": all its solids
+in one flat-shaded mesh with the material "FerroSteel" (brushed steel: metallic, roughness 0.3,
+anisotropic along the local z axis), read from the mesh2 blocks ferro-pov writes into each
+frame's shot/magnets_NNNN.inc (FerroSolids). When every frame's solids are the same, one mesh
+("ferro_solids") stays; when their keys move them, each frame has its own ("ferro_solids_NNNN")
+and the frame-change handler swaps it as the fluid's. A shot without solids imports as before.
+
 --render FRAME PNG renders that frame with Cycles on the CPU (motion blur on). --check
-verifies every frame's vertex count and velocity against the PLY files and exits non-zero on
-a mismatch (the test suite's use: tests/blender/blender_import_test.sh).
+verifies every frame's vertex count and velocity against the PLY files (and the solids' vertex
+count and positions against the magnets include) and exits non-zero on a mismatch (the test
+suite's use: tests/blender/blender_import_test.sh, blender_solids_test.sh).
 """
 import math
 import os
@@ -38,6 +46,22 @@ for h in list(bpy.app.handlers.frame_change_pre):
     if getattr(h, "__name__", "") == "ferro_show_frame":
         bpy.app.handlers.frame_change_pre.remove(h)
 bpy.app.handlers.frame_change_pre.append(ferro_show_frame)
+'''
+
+# Appended to the handler when the solids move: their frame's mesh, as the fluid's.
+HANDLER_SOLIDS_TEXT = '''
+def ferro_show_solids(scene, depsgraph=None):
+    obj = bpy.data.objects.get("FerroSolids")
+    if obj is None:
+        return
+    mesh = bpy.data.meshes.get("ferro_solids_%04d" % scene.frame_current)
+    if mesh is not None and obj.data != mesh:
+        obj.data = mesh
+
+for h in list(bpy.app.handlers.frame_change_pre):
+    if getattr(h, "__name__", "") == "ferro_show_solids":
+        bpy.app.handlers.frame_change_pre.remove(h)
+bpy.app.handlers.frame_change_pre.append(ferro_show_solids)
 '''
 
 
@@ -157,6 +181,79 @@ def fluid_material():
     return mat
 
 
+def read_solids(path):
+    """The solids of a frame's magnets include (povray/PovSolidInclude.cpp): None when the file
+    declares no solids (FerroSolidCount = 0 or absent), else (declared vertex count, vertices in
+    Ferro metres, triangles) of all its mesh2 blocks together, the triangles' indices offset
+    by the vertices before them."""
+    text = open(path).read()
+    m = re.search(r"#declare\s+FerroSolidCount\s*=\s*(\d+)\s*;", text)
+    count = int(m.group(1)) if m else 0
+    if count == 0:
+        return None
+    start = text.find("#declare FerroSolids")
+    if start < 0:
+        fail(path + ": FerroSolidCount is %d but there is no FerroSolids" % count)
+    blocks = re.findall(r"vertex_vectors\s*\{\s*(\d+)([^}]*)\}\s*face_indices\s*\{\s*(\d+)([^}]*)\}", text[start:])
+    if len(blocks) != count:
+        fail(path + ": FerroSolidCount is %d but FerroSolids has %d mesh2 blocks" % (count, len(blocks)))
+    declared = 0
+    verts, tris = [], []
+    for nv_text, vv_text, nf_text, ff_text in blocks:
+        base = len(verts) // 3
+        vv = re.findall(r"<([^>]*)>", vv_text)
+        ff = re.findall(r"<([^>]*)>", ff_text)
+        if len(ff) != int(nf_text):
+            fail(path + ": face_indices declares %s triangles and lists %d" % (nf_text, len(ff)))
+        declared += int(nv_text)
+        for v in vv:
+            x, y, z = (float(c) / 1000.0 for c in v.split(","))
+            verts.extend((x, z, y))  # POV-Ray <x, z, y> in mm -> Ferro (x, y, z) in m
+        for f in ff:
+            a, b, c = (int(i) for i in f.split(","))
+            if max(a, b, c) >= len(vv):
+                fail(path + ": a face index beyond the mesh2's vertices")
+            tris.extend((base + a, base + b, base + c))
+    return declared, verts, tris
+
+
+def steel_material():
+    """Brushed steel, as look.inc's LookSteel: a metallic grey, roughness 0.3, the highlight
+    stretched round the local z axis (the grooves run along it)."""
+    mat = bpy.data.materials.get("FerroSteel") or bpy.data.materials.new("FerroSteel")
+    mat.use_nodes = True
+    nodes = mat.node_tree.nodes
+    bsdf = nodes.get("Principled BSDF")
+    if bsdf:
+        bsdf.inputs["Base Color"].default_value = (0.56, 0.57, 0.59, 1.0)
+        bsdf.inputs["Metallic"].default_value = 1.0
+        bsdf.inputs["Roughness"].default_value = 0.3
+        bsdf.inputs["Anisotropic"].default_value = 0.5
+        tangent = nodes.new("ShaderNodeTangent")
+        tangent.direction_type = "RADIAL"
+        tangent.axis = "Z"
+        mat.node_tree.links.new(tangent.outputs["Tangent"], bsdf.inputs["Tangent"])
+    return mat
+
+
+def check_solids(failures, f, shown, want, include):
+    """--check of frame f's solids: the mesh shown is the frame's, with the include's vertices."""
+    declared, verts, _ = include
+    if shown.name != want:
+        failures.append("frame %d shows solids mesh %s, not %s" % (f, shown.name, want))
+        return
+    if len(shown.vertices) != declared:
+        failures.append("frame %d solids: %d vertices, the include declares %d" % (f, len(shown.vertices), declared))
+        return
+    got = [0.0] * (3 * declared)
+    shown.vertices.foreach_get("co", got)
+    worst = max((abs(a - b) for a, b in zip(got, verts)), default=0.0)
+    if worst > 1e-6:
+        failures.append("frame %d solids: vertices differ from the include's by %g m" % (f, worst))
+        return
+    print("import_shot: frame %d solids: %d vertices match (mesh %s)" % (f, declared, shown.name))
+
+
 def main(argv):
     if not argv or argv[0].startswith("-"):
         fail("usage: blender -b --python import_shot.py -- SHOT_DIR [--save F.blend] [--render FRAME PNG] [--samples N] [--check]")
@@ -219,6 +316,31 @@ def main(argv):
         if not me.materials:
             me.materials.append(bpy.data.materials["FerroFluid"])
 
+    # The solids, from each frame's magnets include; one static mesh when no frame differs.
+    solids = {}
+    for f, _ in frames:
+        inc = os.path.join(shot, "shot", "magnets_%04d.inc" % f)
+        solids[f] = read_solids(inc) if os.path.isfile(inc) else "missing"
+    solid_obj = None
+    solids_move = False
+    if any(v not in (None, "missing") for v in solids.values()):
+        for f, v in solids.items():
+            if v == "missing":
+                fail("shot/magnets_%04d.inc: missing, and other frames have solids (export every frame)" % f)
+            if v is None:
+                fail("shot/magnets_%04d.inc: no solids, and other frames have them" % f)
+        first = solids[frames[0][0]]
+        solids_move = any(solids[f][1:] != first[1:] for f, _ in frames)
+        steel = steel_material()
+        for f, _ in frames if solids_move else frames[:1]:
+            _, verts, tris = solids[f]
+            me = make_mesh("ferro_solids_%04d" % f if solids_move else "ferro_solids", verts, tris, None)
+            me.polygons.foreach_set("use_smooth", [False] * len(me.polygons))  # flat, as ferro-pov's
+            me.materials.append(steel)
+        solid_obj = bpy.data.objects.new("FerroSolids", bpy.data.meshes[
+            "ferro_solids_%04d" % frames[0][0] if solids_move else "ferro_solids"])
+        scene.collection.objects.link(solid_obj)
+
     # The camera of the shot: location, look-at point, horizontal field of view.
     cam = bpy.data.cameras.new("FerroCamera")
     cam.sensor_fit = "HORIZONTAL"
@@ -246,14 +368,17 @@ def main(argv):
 
     # The frame-change handler, in this session and as a registered text block of the .blend.
     text = bpy.data.texts.get("ferro_sequence.py") or bpy.data.texts.new("ferro_sequence.py")
-    text.from_string(HANDLER_TEXT)
+    handler = HANDLER_TEXT + (HANDLER_SOLIDS_TEXT if solids_move else "")
+    text.from_string(handler)
     text.use_module = True
-    exec(compile(HANDLER_TEXT, "ferro_sequence.py", "exec"), {"bpy": bpy})
+    exec(compile(handler, "ferro_sequence.py", "exec"), {"bpy": bpy})
 
     failures = []
     if check:
         for f, _ in frames:
             scene.frame_set(f)
+            if solid_obj is not None:
+                check_solids(failures, f, solid_obj.data, "ferro_solids_%04d" % f if solids_move else "ferro_solids", solids[f])
             shown = obj.data
             nv, vel = meshes[f]
             if shown.name != "ferro_%04d" % f:
