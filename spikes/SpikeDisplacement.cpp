@@ -11,9 +11,14 @@ Dominance patternDominance(const std::vector<Pattern>& patterns, const std::vect
 {
     Dominance d;
     d.dominance.resize(patterns.size());
+    std::vector<char> counted(magnets.size(), 0);
     for (size_t p = 0; p < patterns.size(); ++p) {
-        d.dominance[p] = fieldDominance(magnetField(magnets[size_t(patterns[p].info.magnet)], x));
-        d.sum += d.dominance[p];
+        const size_t m = size_t(patterns[p].info.magnet);
+        d.dominance[p] = fieldDominance(magnetField(magnets[m], x));
+        // One magnet's patterns (SpikePattern::region) lie apart and do not compete: the
+        // magnet counts once in the sum, and each of them has its whole share.
+        if (!counted[m]) d.sum += d.dominance[p];
+        counted[m] = 1;
     }
     return d;
 }

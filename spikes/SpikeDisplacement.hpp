@@ -20,7 +20,8 @@ inline double fieldDominance(const Vec3d& H)
     return h2 * h2 * h2;
 }
 
-/// Each pattern's fieldDominance at a point (from its own magnet's field) and their sum.
+/// Each pattern's fieldDominance at a point (from its own magnet's field) and their sum over
+/// the magnets (a magnet with several patterns, SpikePattern::region, counted once).
 struct Dominance {
     std::vector<double> dominance; ///< per pattern
     double sum = 0;

@@ -1,4 +1,5 @@
 #include "spikes/SpikeFrames.hpp"
+#include "spikes/SpikeSolids.hpp"
 #include "spikes/SurfaceFlow.hpp"
 
 #include "sim/core/FrameRunner.hpp"
@@ -43,6 +44,8 @@ SpikeScene parseSpikeScene(const SceneDocument& doc)
                              ": the scene has " + std::to_string(scene.magnets.size()) +
                              " magnet(s), numbered from 0");
     scene.fps = sim.shot.fps;
+    scene.solids = sim.solids;
+    scene.path = doc.path();
     SpikeFluid& fluid = scene.fluid;
     fluid.density = sim.fluid.restDensity;
     fluid.surfaceTension = sim.fluid.surfaceTension;
@@ -257,6 +260,7 @@ SpikeInput loadSpikeInput(const SpikeScene& scene, const std::string& surfacePat
 
     if (haveParticles && particles.rows() > 0) loadParticles(scene, particles, particlePath, in);
     in.time = frameTime(scene, particles, meshHeader, frameHint);
+    addSolids(scene.solids, in.fluid.particleSpacing, scene.path, in);
     addMagnetHistory(scene, in.time, in);
     return in;
 }

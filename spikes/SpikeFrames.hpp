@@ -2,6 +2,7 @@
 // Files in, files out: one frame (surface mesh + particle file + scene -> spiky mesh) and
 // frame ranges with several frames in flight. This is what ferro-spikes' main calls.
 #include "sim/core/StageErrors.hpp"
+#include "sim/solids/SolidParams.hpp"
 #include "spikes/SpikeMapper.hpp"
 
 #include <stdexcept>
@@ -23,6 +24,8 @@ struct SpikeScene {
     SpikeFluid fluid;                  ///< [fluid], [container], [sim].gravity, [magnetization]
     std::vector<MagnetTrack> magnets;  ///< [[magnets]]: fallback when files carry no magnet state
     double fps = 30.0;                 ///< [shot].fps: frame -> time when files carry no time
+    std::vector<SolidParams> solids;   ///< [[solids]]: their field and their films (SpikeSolids.hpp)
+    std::string path;                  ///< the scene file, for messages
 };
 
 /// Parses the scene (the whole sim scene must be valid, plus [spikes]). Throws SceneError.
@@ -32,6 +35,8 @@ SpikeScene parseSpikeScene(const SceneDocument& doc);
 /// Magnets, in order of preference: the particle file's header, the mesh's header, the scene's
 /// tracks at the frame's time (header `time`, else `frame` / fps, else `frameHint` / fps).
 /// The magnetic law likewise: headers (susceptibility, saturation), else [magnetization].
+/// With [[solids]], their magnetization is solved in the magnets' and particles' field
+/// (addSolids).
 /// An empty surface is valid (a frame without fluid). Throws SpikeIoError when a file cannot
 /// be opened, SpikeInputError when one is unusable (malformed, non-finite positions, ...).
 SpikeInput loadSpikeInput(const SpikeScene& scene, const std::string& surfacePath,

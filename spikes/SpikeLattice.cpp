@@ -14,6 +14,9 @@ namespace ferro {
 
 namespace {
 
+// The most a curved surface's normal turns from a pattern's origin within the pattern.
+constexpr double kMaxTurnDegrees = 75.0;
+
 Vec3d faceNormal(const TriangleMesh& mesh, uint32_t t)
 {
     const auto& tri = mesh.triangles[t];
@@ -76,6 +79,9 @@ struct TraceFrame {
     double l;
     double maxTilt;   // [deg] the drop direction's largest angle from n0 (SpikeParams::maxTilt)
     double squareness; // the planform: 0 hexagon, 1 square (SpikePattern::squareness)
+    /// A line ends where the surface's normal has turned from n0 by more than the angle of
+    /// this cosine (-2: never; SpikeLattice.hpp's curved surfaces).
+    double minCosTurn = -2;
     /// The second lattice axis (unit): e1 turned by latticeAngle(squareness) towards e1perp.
     Vec3d e2() const
     {
@@ -86,17 +92,55 @@ struct TraceFrame {
     }
 };
 
-// The tips traced so far; the first tip at lattice coordinates (i, j) wins.
+// The tips traced so far; the first tip at lattice coordinates (i, j) wins. With gaps (a
+// surface with solids: a coat round a cylinder or a cone), a tip closer than ownGap to a tip
+// of this pattern already traced, or closer than otherGap to a tip of an earlier pattern
+// (`occupy(x, false)`), is not added: on a closed curved surface the lattice's lines meet
+// again round the back, where a flat lattice has no such place, and there the first tip wins;
+// and where two patterns' lattices meet the seam keeps most of a spacing (settleSeams merges
+// what still comes closer than 0.6 l).
 struct LatticeTips {
     std::vector<Tip> tips;
     std::unordered_map<int64_t, size_t> index; // latticeKey(i, j) -> tips
+    double ownGap = 0, otherGap = 0;           // [m]; 0 = no test
+    std::unordered_map<int64_t, std::vector<std::pair<Vec3d, bool>>> occupied; // cells -> (position, own)
+
+    double cell() const { return std::max(ownGap, otherGap); }
+    int64_t cellKey(const Vec3d& x) const
+    {
+        const double c = cell();
+        const int64_t i = int64_t(std::floor(x.x() / c)), j = int64_t(std::floor(x.y() / c)),
+                      k = int64_t(std::floor(x.z() / c));
+        return (i * 73856093) ^ (j * 19349663) ^ (k * 83492791);
+    }
+    bool crowded(const Vec3d& x) const
+    {
+        const double c = cell();
+        if (!(c > 0)) return false;
+        for (int a = -1; a <= 1; ++a)
+            for (int b = -1; b <= 1; ++b)
+                for (int d = -1; d <= 1; ++d) {
+                    const auto it = occupied.find(cellKey(x + c * Vec3d(a, b, d)));
+                    if (it == occupied.end()) continue;
+                    for (const auto& [y, own] : it->second) {
+                        const double gap = own ? ownGap : otherGap;
+                        if ((y - x).squaredNorm() < gap * gap) return true;
+                    }
+                }
+        return false;
+    }
+    void occupy(const Vec3d& x, bool own)
+    {
+        if (cell() > 0) occupied[cellKey(x)].push_back({x, own});
+    }
 };
 
 void addTip(LatticeTips& lattice, int i, int j, const Vec3d& x, const Vec3d& n)
 {
-    if (lattice.index.count(latticeKey(i, j))) return;
+    if (lattice.index.count(latticeKey(i, j)) || lattice.crowded(x)) return;
     lattice.index[latticeKey(i, j)] = lattice.tips.size();
     lattice.tips.push_back({i, j, x, n, Eigen::Matrix<double, 2, 3>::Zero()});
+    lattice.occupy(x, true);
 }
 
 bool tipPosition(const LatticeTips& lattice, int i, int j, Vec3d& x)
@@ -270,6 +314,7 @@ void traceLine(const TraceFrame& f, Vec3d s, Vec3d n, bool startAlive, Vec3d d, 
         d.normalize();
         Vec3d next, nextNormal;
         if (!dropOnSurface(f, s + f.l * d, next, nextNormal)) break;
+        if (nextNormal.dot(f.n0) < f.minCosTurn) break;
         s = next;
         n = nextNormal;
         if (points) points->push_back(s);
@@ -436,8 +481,9 @@ bool nearestFreeHit(const FreeSurface& surface, const Vec3d& p, const Vec3d& d, 
 }
 
 void traceLattice(Pattern& pat, const FreeSurface& surface, const SurfaceFields& fields, const SpikeParams& P,
-                  double Mc, double diagonal)
+                  double Mc, double diagonal, const std::vector<Pattern>& earlier)
 {
+    const bool curved = fields.input().fluid.solids != nullptr;
     const double l = pat.info.spacing;
     const Vec3d n0 = pat.info.normal, e1 = pat.info.axis;
     const SmoothNormals normals(surface, 0.5 * l);
@@ -446,11 +492,26 @@ void traceLattice(Pattern& pat, const FreeSurface& surface, const SurfaceFields&
     Vec3d anchor, d0;
     const auto [di, dj] = carriedAnchor(foot, P, pat.info.magnet, anchor, d0);
     pat.info.origin = anchor;
-    const TraceFrame frame{surface, normals, fields, Mc, anchor, n0, e1, n0.cross(e1), l, P.maxTilt, squareness};
+    TraceFrame frame{surface, normals, fields, Mc, anchor, n0, e1, n0.cross(e1), l, P.maxTilt, squareness};
+    // On a curved coat a lattice traced along the surface stays one over a patch that turns
+    // less than a right angle: beyond, its rows have wound round the solid and meet the rows
+    // traced the other way at random offsets (a steel cylinder in a transverse field: the far
+    // face's spikes came 0.5 l apart and leaned 25-40 degrees). The rest is left to patterns
+    // of its own (addRegionPatterns).
+    if (curved) frame.minCosTurn = std::cos(kMaxTurnDegrees * kPi / 180.0);
     LatticeTips lattice;
+    if (curved) {
+        lattice.ownGap = 0.8 * l;
+        lattice.otherGap = 0.8 * l;
+        for (const Pattern& other : earlier)
+            for (const Tip& tip : other.tips) lattice.occupy(tip.position, false);
+    }
     const int maxRings = int(std::ceil(diagonal / l)) + 1;
-    if (squareness > 0 || P.morphs()) {
-        pat.info.rings = traceRows(frame, maxRings, lattice, P.morphs());
+    // On a surface with solids the tips are traced in rows (every step a local one along the
+    // surface): the rings' interpolation between two axis tips (Fig. 7c) cuts across a coat's
+    // curvature, through the solid.
+    if (squareness > 0 || P.morphs() || curved) {
+        pat.info.rings = traceRows(frame, maxRings, lattice, P.morphs() || curved);
     } else {
         std::vector<Vec3d> axisTips[6];
         traceAxes(frame, maxRings, lattice, axisTips);
@@ -464,7 +525,7 @@ void traceLattice(Pattern& pat, const FreeSurface& surface, const SurfaceFields&
             lattice.index[latticeKey(lattice.tips[t].i, lattice.tips[t].j)] = t;
         }
     }
-    jitterTips(frame, lattice, P, pat.info.magnet);
+    jitterTips(frame, lattice, P, pat.info.noiseKey());
     carryTips(frame, lattice, P, pat.info.magnet, d0);
     for (Tip& tip : lattice.tips) tip.toLattice = tipLatticeMap(frame, lattice, tip);
     pat.tips = std::move(lattice.tips);
@@ -473,7 +534,7 @@ void traceLattice(Pattern& pat, const FreeSurface& surface, const SurfaceFields&
     // the tip's field. Its presence (defects) scales its profile in the displacement instead.
     for (Tip& tip : pat.tips) {
         const Vec3d H = fields.field(tip.position, tip.normal);
-        tip.presence = tipPresence(P, pat.info.magnet, tip.i, tip.j);
+        tip.presence = tipPresence(P, pat.info.noiseKey(), tip.i, tip.j);
         tip.amplitude = spikeAmplitude(P, H.norm(), l) * fields.heightFade(tip.position, H);
         tip.direction = growthDirection(H, tip.normal, P.maxTilt);
     }

@@ -67,8 +67,12 @@ struct Pattern {
 /// to jitter l, from seed, magnet and (i, j)) and is dropped again. Fills pat.tips (each with its lattice map from its neighbours'
 /// positions, its amplitude spikeAmplitude times the magnetization fade and its presence under
 /// P.defects, eq. 14, and its growth direction), pat.info.rings and pat.grid.
+/// On a surface with solids (SpikeFluid::solids) the tips are traced in rows, as a morphing
+/// lattice's are, and no tip stands closer than l / 2 to one of this pattern traced before it
+/// (a coat's lattice meets itself round the back of a solid) or closer than 0.8 l to a tip of
+/// the `earlier` patterns.
 void traceLattice(Pattern& pat, const FreeSurface& surface, const SurfaceFields& fields, const SpikeParams& P,
-                  double Mc, double diagonal);
+                  double Mc, double diagonal, const std::vector<Pattern>& earlier = {});
 
 /// Phase 3b, where two or more patterns meet (issue 14's "two magnets brought together"):
 /// each tip's ownership (0..1, Tip::ownership) starts from its pattern's share of the summed

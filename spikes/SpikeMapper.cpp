@@ -100,7 +100,29 @@ bool patternOrigin(const PlacementContext& c, const Magnet& magnet, const Vec3d&
             anchor = sum / double(std::max<size_t>(count, 1));
         }
     }
-    if (nearestFreeHit(c.surface, anchor, axisDir, std::numeric_limits<double>::max(), x0, n0)) return true;
+    if (c.in.fluid.solids) {
+        // A coat round a solid: the axis through the anchor often meets it twice at the same
+        // distance (a uniform field across a cylinder through its axis). The nearest hit then
+        // goes to whichever side the surface's noise favours, and the pattern to the other face
+        // from frame to frame: ties within 1 % go to the hit ahead along the axis.
+        const std::vector<SurfaceRayCaster::Hit> hits = c.surface.caster.lineHits(anchor, axisDir);
+        const SurfaceRayCaster::Hit* chosen = nullptr;
+        for (const SurfaceRayCaster::Hit& h : hits) {
+            if (!c.surface.isFree(input.triangles[h.triangle])) continue;
+            if (!chosen) chosen = &h;
+            else if (std::abs(h.t) <= 1.01 * std::abs(chosen->t) && h.t > 0 && chosen->t < 0) chosen = &h;
+            else if (std::abs(h.t) > 1.01 * std::abs(chosen->t)) break;
+        }
+        if (chosen) {
+            x0 = chosen->point;
+            const auto& t = input.triangles[chosen->triangle];
+            const Vec3d a = toD(input.vertices[t[0]]), b = toD(input.vertices[t[1]]), d = toD(input.vertices[t[2]]);
+            n0 = (b - a).cross(d - a).normalized();
+            return true;
+        }
+    } else if (nearestFreeHit(c.surface, anchor, axisDir, std::numeric_limits<double>::max(), x0, n0)) {
+        return true;
+    }
     // The axis misses the fluid: anchor the pattern where this magnet's field is strongest.
     double best = -1;
     for (size_t v = 0; v < nIn; ++v) {
@@ -204,6 +226,115 @@ std::vector<Pattern> placePatterns(const PlacementContext& c, double g, double M
 }
 
 // Per vertex: the area of a third of each adjacent triangle [m^2].
+std::vector<double> vertexAreas(const TriangleMesh& mesh);
+
+// Phase 2-3 on a surface with solids: a pattern of its own (SpikePattern::region) for each part
+// of the supercritical surface that no pattern reached. A magnet's pattern starts where its
+// axis meets the surface and is traced along it, and on a dish that is where its heap stands;
+// a sculpture gathers the field at its edges and tips, away from the axis and on both sides
+// of a solid (a horizontal field across a steel cylinder makes two supercritical faces, one
+// each side). Round by round: the supercritical free vertices farther than a spacing from
+// every traced tip fall into connected parts (along the mesh's edges); the part with the
+// largest area (at least l^2 / 2: room for a spike) seeds a pattern at its vertex nearest its
+// centroid weighted by area and |H|, traced with the earlier patterns' tips kept clear
+// (traceLattice). A centroid is an integral of the surface, so a surface's noise moves it
+// little: the seed, and so the pattern, stays from frame to frame. Ties (a ring round a
+// symmetric solid, whose centroid lies on its axis) go by distance in steps of l / 4, then
+// by a fixed order of space. The magnet is the one whose own field is strongest at the seed;
+// its planform and the spacing from the field there. At most kMostRegions patterns.
+void addRegionPatterns(const PlacementContext& c, double g, double Mc, std::vector<Pattern>& patterns)
+{
+    constexpr int kMostRegions = 32;
+    const TriangleMesh& input = c.surface.mesh;
+    const size_t nV = input.vertices.size();
+    const std::vector<Vec3d> normals = areaWeightedNormals(input);
+    const std::vector<double> area = vertexAreas(input);
+    std::vector<std::vector<uint32_t>> neighbours(nV);
+    for (const auto& t : input.triangles)
+        for (int k = 0; k < 3; ++k) {
+            neighbours[t[size_t(k)]].push_back(t[size_t((k + 1) % 3)]);
+            neighbours[t[size_t((k + 1) % 3)]].push_back(t[size_t(k)]);
+        }
+    // The field at every supercritical vertex, once (the solids' field is a sum over panels).
+    std::vector<double> field(nV, 0.0);
+    tbb::parallel_for(size_t(0), nV, [&](size_t v) {
+        if (c.active[v]) field[v] = c.fields.field(toD(input.vertices[v]), normals[v]).norm();
+    });
+    auto covered = [&](const Vec3d& x) {
+        for (const Pattern& p : patterns) {
+            bool near = false;
+            p.grid->forEachWithin(x, p.info.spacing, [&](uint32_t, double) { near = true; });
+            if (near) return true;
+        }
+        return false;
+    };
+    for (int region = 1; region <= kMostRegions; ++region) {
+        double l = std::numeric_limits<double>::infinity();
+        for (const Pattern& p : patterns) l = std::min(l, p.info.spacing);
+        std::vector<char> open(nV, 0);
+        for (size_t v = 0; v < nV; ++v) open[v] = c.active[v] && field[v] > 0 && !covered(toD(input.vertices[v]));
+        // The largest open part.
+        std::vector<uint32_t> best, part;
+        double bestArea = 0;
+        std::vector<char> seen(nV, 0);
+        for (size_t v0 = 0; v0 < nV; ++v0) {
+            if (!open[v0] || seen[v0]) continue;
+            part.assign(1, uint32_t(v0));
+            seen[v0] = 1;
+            double partArea = 0;
+            for (size_t k = 0; k < part.size(); ++k) {
+                partArea += area[part[k]];
+                for (uint32_t u : neighbours[part[k]])
+                    if (open[u] && !seen[u]) seen[u] = 1, part.push_back(u);
+            }
+            if (partArea > bestArea) bestArea = partArea, best = part;
+        }
+        if (best.empty() || (std::isfinite(l) && bestArea < 0.5 * l * l)) return;
+        Vec3d centroid = Vec3d::Zero();
+        double weight = 0;
+        for (uint32_t v : best) {
+            centroid += area[v] * field[v] * toD(input.vertices[v]);
+            weight += area[v] * field[v];
+        }
+        centroid /= weight;
+        const double step = std::isfinite(l) ? 0.25 * l : 1e-3;
+        auto rank = [&](uint32_t v) { // smaller is better
+            const Vec3d x = toD(input.vertices[v]);
+            const Vec3d cell = (x / step).array().floor();
+            return std::make_tuple(std::floor((x - centroid).norm() / step), cell.x(), cell.y(), cell.z());
+        };
+        uint32_t seed = best.front();
+        for (uint32_t v : best)
+            if (rank(v) < rank(seed)) seed = v;
+        const Vec3d x0 = toD(input.vertices[seed]), n0 = normals[seed];
+        int magnet = -1;
+        double strongest = -1;
+        for (size_t m = 0; m < c.in.magnets.size(); ++m) {
+            if (c.in.magnets[m].strength == 0) continue;
+            const double h = magnetField(c.in.magnets[m], x0).squaredNorm();
+            if (h > strongest) strongest = h, magnet = int(m);
+        }
+        if (magnet < 0) return;
+        const Vec3d H0 = c.fields.field(x0, n0);
+        Pattern pat;
+        pat.info.magnet = magnet;
+        pat.info.region = region;
+        pat.info.origin = x0;
+        pat.info.normal = n0;
+        pat.info.field = H0.norm();
+        pat.info.magnetization = c.fields.magnetization(x0, H0);
+        pat.info.lattice = c.P.latticeOf(magnet);
+        pat.info.squareness = c.P.squarenessOf(magnet);
+        pat.info.spacing = tipSpacing(c.in, c.P, g, c.fields.fieldHistoryPeak(x0, n0, H0), pat.info.magnetization, Mc,
+                                      pat.info.squareness);
+        pat.info.axis = latticeAxis(n0, c.P.orientation);
+        traceLattice(pat, c.surface, c.fields, c.P, Mc, c.diagonal, patterns);
+        if (pat.tips.empty()) return; // the seed was crowded out: nothing more to place
+        patterns.push_back(std::move(pat));
+    }
+}
+
+// Per vertex: the area of a third of each adjacent triangle [m^2].
 std::vector<double> vertexAreas(const TriangleMesh& mesh)
 {
     std::vector<double> area(mesh.vertices.size(), 0.0);
@@ -299,15 +430,22 @@ std::vector<Pattern> tracePatterns(const SpikeInput& in, const SpikeParams& P, c
     // 2. One pattern per magnet with a supercritical origin.
     std::vector<Pattern> patterns =
         placePatterns(PlacementContext{in, P, fields, freeSurface, region.active, diagonal}, g, Mc);
-    if (patterns.empty()) return {};
+    if (patterns.empty() && !in.fluid.solids) return {};
 
     // 3. Tips (Fig. 7): a hexagon traces six axes along the surface and fills the rings between
     // them; a square traces the i axis both ways and rows along e2 from its tips; a rhombic
     // lattice, and every lattice of a shot whose hexagons morph, also the rows along e1 from the
     // e2 axis (traceRows).
-    for (Pattern& pat : patterns) traceLattice(pat, freeSurface, fields, P, Mc, diagonal);
-    settleSeams(patterns, in.magnets);
-    return patterns;
+    std::vector<Pattern> traced;
+    for (Pattern& pat : patterns) {
+        traceLattice(pat, freeSurface, fields, P, Mc, diagonal, traced);
+        traced.push_back(std::move(pat));
+    }
+    if (in.fluid.solids)
+        addRegionPatterns(PlacementContext{in, P, fields, freeSurface, region.active, diagonal}, g, Mc, traced);
+    if (traced.empty()) return {};
+    settleSeams(traced, in.magnets);
+    return traced;
 }
 
 // Phases 5-6 on a refined surface into `out`: heights and directions, then the volume
@@ -349,12 +487,12 @@ std::vector<std::vector<TipMotion>> tipMotions(const std::vector<Pattern>& patte
     const std::vector<Pattern> before = tracePatterns(*earlier, P, fields, Mc, region);
     std::map<std::tuple<int, int, int>, const Tip*> then;
     for (const Pattern& pat : before)
-        for (const Tip& tip : pat.tips) then[{pat.info.magnet, tip.i, tip.j}] = &tip;
+        for (const Tip& tip : pat.tips) then[{pat.info.noiseKey(), tip.i, tip.j}] = &tip;
     for (size_t p = 0; p < patterns.size(); ++p)
         for (size_t t = 0; t < patterns[p].tips.size(); ++t) {
             const Tip& tip = patterns[p].tips[t];
             TipMotion& m = motion[p][t];
-            const auto it = then.find({patterns[p].info.magnet, tip.i, tip.j});
+            const auto it = then.find({patterns[p].info.noiseKey(), tip.i, tip.j});
             if (it != then.end()) {
                 m.drift = (tip.position - it->second->position) / interval;
                 if (tip.amplitude > 0) m.growth = (tip.amplitude - it->second->amplitude) / (interval * tip.amplitude);
@@ -440,6 +578,7 @@ Vec3d totalFieldAt(const SpikeInput& input, const Vec3d& x)
 {
     Vec3d H = magnetField(input.magnets, x);
     if (input.particleField) H += input.particleField(x);
+    if (input.solidField) H += input.solidField(x);
     return H;
 }
 

@@ -15,6 +15,11 @@
 //     l (eq. 15, or the physical spacing), each next tip where the field line through the
 //     stepped point meets the surface; tips between two axes interpolate the two n-th axis
 //     tips and are again dropped along the field line onto the surface.
+//     On a surface with solids (SpikeFluid::solids: a coat on a sculpture), the tips are
+//     traced in rows along the surface, no two closer than l / 2, and every part of the
+//     supercritical surface no pattern reached seeds a pattern of its own (its strongest-field
+//     vertex; SpikePattern::region). Surface within film_thickness of a solid (its bare wall,
+//     a wetting film) is never spiky, and the field includes the solids' (SpikeSolids.hpp).
 //  4. Refinement: CGAL isotropic remeshing of the supercritical region to l / resolution.
 //  5. Displacement: each vertex gets the lattice coordinates of eq. 13 from its nearby tips
 //     (each tip's local lattice basis, from its neighbours' positions, maps the vertex to
@@ -48,6 +53,9 @@ struct SpikeFluid {
     Vec3d gravity{0, 0, -9.81};     ///< [m/s^2]
     MagnetizationParams law;        ///< chi0, Ms
     std::shared_ptr<const Container> container; ///< wetted walls; null = every surface is free
+    /// The scene's solids ([[solids]]) as obstacles (null = none): surface closer than
+    /// SpikeParams::filmThickness to one is its bare wall or a wetting film, never spiky.
+    std::shared_ptr<const Container> solids;
     bool hasCenter = false;         ///< a natural anchor (the container's centre) for uniform fields
     Vec3d center{0, 0, 0};
     double particleSpacing = 0.0;   ///< [m]; 0 = unknown
@@ -70,6 +78,9 @@ struct SpikeInput {
     SpikeParticles particles;
     /// Field of the magnetized particles at a point [A/m] (null = magnets only).
     std::function<Vec3d(const Vec3d&)> particleField;
+    /// Field of the magnetized solids ([[solids]]) at a point outside them [A/m], solved in
+    /// the magnets' and the particles' field (null = no solids).
+    std::function<Vec3d(const Vec3d&)> solidField;
     /// The magnets' recent past for SpikeParams::growthTime, from the scene's tracks:
     /// pastMagnets[k] at k steps back (k = 0: now, by the tracks, the reference the past is
     /// compared with, so header magnets softened differently never make a still field lag),
@@ -93,7 +104,14 @@ struct SpikeInput {
 
 /// One hexagonal pattern (one magnet).
 struct SpikePattern {
-    int magnet = -1;        ///< index into SpikeInput::magnets
+    int magnet = -1;        ///< index into SpikeInput::magnets (the one dominating the origin)
+    /// 0: the magnet's own pattern, from where its axis meets the surface; k > 0: the k-th
+    /// pattern seeded where a surface with solids was supercritical but no pattern reached
+    /// (a coat's far side, a sculpture's edge away from the magnet's axis).
+    int region = 0;
+    /// The pattern's identity in the art director's noise and in the tips' matching from frame
+    /// to frame: the magnet's index for its own pattern.
+    int noiseKey() const { return magnet + 7919 * region; }
     Vec3d origin;           ///< x0 on the surface [m]
     Vec3d normal;           ///< outward surface normal at x0
     Vec3d axis;             ///< first lattice axis (unit, tangent at x0)
@@ -128,7 +146,7 @@ struct SpikeResult {
     bool refinedOk = true;           ///< false: the mesh was not a manifold CGAL could remesh
 };
 
-/// The field H [A/m] at x: the magnets plus, when given, the magnetized particles.
+/// The field H [A/m] at x: the magnets plus, when given, the magnetized particles and solids.
 Vec3d totalFieldAt(const SpikeInput& input, const Vec3d& x);
 
 /// Synthesizes the spikes on input.surface. Deterministic: the same input gives the same

@@ -61,6 +61,7 @@ SpikeParams parseSpikeParams(const SceneDocument& doc)
     p.growthTime = r.nonNegative("growth_time", p.growthTime);
     p.responseTime = r.numberInRange("response_time", p.responseTime, 0, 5);
     p.wallMargin = r.nonNegative("wall_margin", p.wallMargin);
+    p.filmThickness = r.nonNegative("film_thickness", p.filmThickness);
     p.wallFade = r.nonNegative("wall_fade", p.wallFade);
     p.resolution = r.numberInRange("resolution", p.resolution, 3, 100);
     p.remeshIterations = r.integerInRange("remesh_iterations", p.remeshIterations, 0, 20);

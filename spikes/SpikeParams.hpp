@@ -140,6 +140,9 @@ struct SpikeParams {
     double responseTime = 0.0;
     double wallMargin = 0.0;         ///< surface closer than this to a container wall is wetted wall,
                                      ///< never spiky [m]; 0 = 1.5 particle spacings (2 mm if unknown)
+    double filmThickness = 0.0;      ///< surface closer than this to a solid ([[solids]]) is its bare
+                                     ///< wall or a wetting film on it, never spiky [m]; 0 = 3 particle
+                                     ///< spacings (4 mm if unknown)
     double wallFade = 0.0;           ///< height ramps in over this distance from the wetted wall [m];
                                      ///< 0 = one tip spacing l. Not l / 2: a ramp narrower than a
                                      ///< spike tilts its peak off the lattice point, and the outer

@@ -31,6 +31,7 @@ SurfaceFields::SurfaceFields(const SpikeInput& in, const SpikeParams& p, double 
         particleGrid_ = std::make_unique<HashGrid>(particles.positions, radius_);
     }
     wallMargin_ = p.wallMargin > 0 ? p.wallMargin : (spacing_ > 0 ? 1.5 * spacing_ : 2e-3);
+    filmThickness_ = p.filmThickness > 0 ? p.filmThickness : (spacing_ > 0 ? 3.0 * spacing_ : 4e-3);
     branch_ = SpikeBifurcation::fromThresholds(p.lowerThreshold, p.magnetizationFade);
 }
 
@@ -38,6 +39,7 @@ Vec3d SurfaceFields::field(const Vec3d& x, const Vec3d& n) const
 {
     Vec3d H = magnetField(in_.magnets, x);
     if (in_.particleField) H += in_.particleField(x + 2.0 * spacing_ * n);
+    if (in_.solidField) H += in_.solidField(x);
     return H;
 }
 
@@ -249,7 +251,8 @@ double SurfaceFields::magnetizationGate(double M) const
 
 bool SurfaceFields::wetted(const Vec3d& x) const
 {
-    return in_.fluid.container && !in_.fluid.container->contains(x, wallMargin_);
+    if (in_.fluid.container && !in_.fluid.container->contains(x, wallMargin_)) return true;
+    return in_.fluid.solids && !in_.fluid.solids->contains(x, filmThickness_);
 }
 
 } // namespace ferro

@@ -34,8 +34,8 @@ public:
     /// default wall margin (1.5 spacings, 2 mm if unknown).
     SurfaceFields(const SpikeInput& in, const SpikeParams& p, double Mc);
 
-    /// H [A/m] at a surface point x with outward normal n: the magnets at x, the particles'
-    /// field a little above x (two particle spacings out along n), where the discrete particles
+    /// H [A/m] at a surface point x with outward normal n: the magnets and the solids at x, the
+    /// particles' field a little above x (two particle spacings out along n), where the discrete particles
     /// blur into the continuum they stand for (right at the surface a single particle's near
     /// field would turn the spikes every which way).
     Vec3d field(const Vec3d& x, const Vec3d& n) const;
@@ -90,7 +90,8 @@ public:
     /// The input these fields are evaluated on.
     const SpikeInput& input() const { return in_; }
 
-    /// True where x is closer than the wall margin to the container's walls (never spiky).
+    /// True where x is closer than the wall margin to the container's walls, or closer than
+    /// the film thickness to a solid (its bare wall, a wetting film): never spiky.
     bool wetted(const Vec3d& x) const;
 
 private:
@@ -111,7 +112,7 @@ private:
     const SpikeInput& in_;
     const SpikeParams& p_;
     double Mc_;
-    double spacing_ = 0, radius_ = 0, wallMargin_ = 0;
+    double spacing_ = 0, radius_ = 0, wallMargin_ = 0, filmThickness_ = 0;
     std::unique_ptr<HashGrid> particleGrid_;
 };
 

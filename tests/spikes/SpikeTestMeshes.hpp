@@ -9,6 +9,7 @@
 #include <functional>
 #include <sstream>
 #include <string>
+#include <vector>
 
 namespace ferro::spiketest {
 
@@ -99,6 +100,43 @@ inline TriangleMesh makePool(double R, int rings, const std::function<double(dou
         mesh.triangles.push_back({t0, b0, b1});
         mesh.triangles.push_back({t0, b1, t1});
     }
+    computeVertexNormals(mesh);
+    return mesh;
+}
+
+/// A coat of fluid on an upright cylinder (a solid standing on z = 0, axis +z through the
+/// origin): the closed tube between radii Ri and Ro from z = 0 to z = height, its outer wall
+/// nTheta x nZ quads, its inner wall the same, the top and bottom annuli `rings` bands each.
+/// `bump(theta, z)` [m] is added to the outer radius (0: a smooth coat). Triangles are
+/// counter-clockwise seen from outside the fluid.
+inline TriangleMesh makeCoat(double Ri, double Ro, double height, int nTheta, int nZ, int rings,
+                             const std::function<double(double, double)>& bump = {})
+{
+    TriangleMesh mesh;
+    // A grid of (nTheta) x (rows) vertices round a closed loop of rows: up the outer wall, in
+    // across the top, down the inner wall, out across the bottom.
+    std::vector<std::pair<double, double>> rows; // (radius, z) of each row; outer radius rows flagged by r == Ro
+    for (int k = 0; k < nZ; ++k) rows.push_back({Ro, height * k / nZ});
+    for (int k = 0; k < rings; ++k) rows.push_back({Ro - (Ro - Ri) * k / rings, height});
+    for (int k = 0; k < nZ; ++k) rows.push_back({Ri, height - height * k / nZ});
+    for (int k = 0; k < rings; ++k) rows.push_back({Ri + (Ro - Ri) * k / rings, 0.0});
+    const int nRows = int(rows.size());
+    for (int r = 0; r < nRows; ++r)
+        for (int i = 0; i < nTheta; ++i) {
+            const double a = 2 * kPi * i / nTheta;
+            double radius = rows[size_t(r)].first;
+            const double z = rows[size_t(r)].second;
+            if (bump && r < nZ && r > 0) radius += bump(a, z);
+            mesh.vertices.emplace_back(float(radius * std::cos(a)), float(radius * std::sin(a)), float(z));
+        }
+    auto at = [&](int r, int i) { return uint32_t(((r + nRows) % nRows) * nTheta + (i + nTheta) % nTheta); };
+    for (int r = 0; r < nRows; ++r)
+        for (int i = 0; i < nTheta; ++i) {
+            // Up the outer wall with theta growing: (r, i) -> (r, i + 1) -> (r + 1, i + 1) is
+            // counter-clockwise seen from outside.
+            mesh.triangles.push_back({at(r, i), at(r, i + 1), at(r + 1, i + 1)});
+            mesh.triangles.push_back({at(r, i), at(r + 1, i + 1), at(r + 1, i)});
+        }
     computeVertexNormals(mesh);
     return mesh;
 }

@@ -1,0 +1,43 @@
+// The solids of a spike frame (SpikeSolids.hpp).
+#include "spikes/SpikeSolids.hpp"
+
+#include "sim/core/StageErrors.hpp"
+#include "sim/geometry/Container.hpp"
+#include "sim/solids/SurfaceChargeSolver.hpp"
+
+#include <cmath>
+#include <memory>
+
+namespace ferro {
+
+void addSolids(const std::vector<SolidParams>& solids, double spacing, const std::string& where, SpikeInput& in)
+{
+    if (solids.empty()) return;
+    std::vector<SolidSurface> surfaces;
+    std::vector<SolidWall> walls;
+    for (const SolidParams& s : solids) {
+        const double edge = s.panelSize > 0 ? s.panelSize : spacing > 0 ? 2 * spacing : s.radius / 8;
+        surfaces.push_back(solidSurfaceAt(s, solidShape(s, edge, where), in.time));
+        walls.push_back({surfaces.back().vertices, surfaces.back().triangles});
+    }
+    ContainerParams none; // the solids alone: the vessel's walls are in.fluid.container
+    in.fluid.solids = std::shared_ptr<const Container>(makeContainerWithSolids(none, walls, where));
+
+    auto solver = std::make_shared<SurfaceChargeSolver>();
+    solver->setSurfaces(surfaces);
+    const std::vector<Magnet> magnets = in.magnets;
+    const std::function<Vec3d(const Vec3d&)> particles = in.particleField;
+    const SurfaceChargeSolver::Stats st = solver->solve([&](const Vec3d& p) {
+        Vec3d h = magnetField(magnets, p);
+        if (particles) h += particles(p);
+        return h;
+    });
+    if (!st.converged)
+        throw BadInputError(where + ": the solids' magnetization did not converge (residual " +
+                            std::to_string(st.residual) + " after " + std::to_string(st.iterations) + " steps)");
+    for (double q : solver->charge())
+        if (!std::isfinite(q)) throw BadInputError(where + ": the solids' magnetization is not finite");
+    in.solidField = [solver](const Vec3d& x) { return solver->field(x); };
+}
+
+} // namespace ferro
