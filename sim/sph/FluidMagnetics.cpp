@@ -235,8 +235,10 @@ void FluidMagnetics::update(double t, const std::vector<Vec3>& x, const SurfaceP
     H_.resize(n, Vec3::Zero());
     M_.resize(n, Vec3::Zero());
     Hind_.resize(n, Vec3::Zero());
-    // The solids' field rides with the particles between solves (refreshed at each solve;
-    // none before the first, which a resumed run's first step always is).
+    // The solids' field at the particles' positions now, from the last solve's charge
+    // (SolidCoupling::fieldAt; none before the first solve, which a resumed run's first step
+    // always is).
+    if (solids_ && Hsol_.size() == n) solids_->fieldAt(x, Hsol_, Jsol_);
     forEachParticle(n, [&](size_t i) {
         Hext_[i] = magnetField(magnets_, x[i].cast<double>()).cast<Real>();
         if (Hsol_.size() == n) Hext_[i] += Hsol_[i];
@@ -375,7 +377,6 @@ void FluidMagnetics::permute(const std::vector<uint32_t>& order) {
         ferro::permute(Hsol_, order);
         ferro::permute(Jsol_, order);
     }
-    if (solids_) solids_->permute(order);
 }
 
 Mat3d FluidMagnetics::appliedGradient(size_t i, const Vec3& x) const {

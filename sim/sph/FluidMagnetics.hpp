@@ -173,7 +173,7 @@ private:
     double volume_ = 0, spacing_ = 0, rho0_ = 0, gravity_ = 0;
     std::unique_ptr<MagnetizationSolver> solver_;
     std::unique_ptr<SolidCoupling> solids_;  // [[solids]] (null without)
-    std::vector<Vec3> Hsol_;                 // the solids' field at each particle, refreshed at each solve
+    std::vector<Vec3> Hsol_;                 // the solids' field at each particle, evaluated every step
     std::vector<Eigen::Matrix3f> Jsol_;      // and its Jacobian
     std::vector<Magnet> magnets_;            // at the time of the last update
     std::vector<Vec3> Hext_, Hind_, H_, M_;  // per particle, current order
