@@ -345,6 +345,10 @@ def main(argv):
     cam = bpy.data.cameras.new("FerroCamera")
     cam.sensor_fit = "HORIZONTAL"
     cam.angle = math.radians(pov_number(pov, "FerroCameraAngle"))
+    # Ferro's shots are centimetres across: Blender's default near clip (0.1 m) cut off a
+    # camera closer than that; POV-Ray has none. 1 mm, and the far clip 100 m.
+    cam.clip_start = 0.001
+    cam.clip_end = 100.0
     cam_obj = bpy.data.objects.new("FerroCamera", cam)
     scene.collection.objects.link(cam_obj)
     location = pov_vector(pov, "FerroCameraLocation")
