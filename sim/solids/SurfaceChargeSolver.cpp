@@ -409,18 +409,22 @@ void SurfaceChargeSolver::fieldAndGradient(const Vec3d& x, Vec3d& H, Mat3d& J) c
     }
     // Pass 1, branch-free over every panel (float, centroids about origin_): the point-charge
     // field and Jacobian of the panels beyond kPointRuleReach radii, and a flag for the rest.
+    // Eight lanes of partial sums, panel j into lane j % 8, added in a fixed order at the end:
+    // the compiler keeps each lane's adds in order, so the loop vectorizes (SSE or wider)
+    // without reordering a sum, and the result is the same bits on every thread count.
     thread_local std::vector<float> nearFlag;
     nearFlag.resize(n);
     const Vec3d xl = x - origin_;
     const float X = float(xl.x()), Y = float(xl.y()), Z = float(xl.z());
-    float hx = 0, hy = 0, hz = 0, gxx = 0, gyy = 0, gzz = 0, gxy = 0, gxz = 0, gyz = 0;
+    constexpr size_t kLanes = 8;
+    alignas(32) float acc[9][kLanes] = {};
     const float* cx = pcx_.data();
     const float* cy = pcy_.data();
     const float* cz = pcz_.data();
     const float* q = pq_.data();
     const float* reach2 = preach2_.data();
     float* flag = nearFlag.data();
-    for (size_t j = 0; j < n; ++j) {
+    auto panel = [&](size_t j, size_t k) {
         const float dx = X - cx[j], dy = Y - cy[j], dz = Z - cz[j];
         const float r2 = dx * dx + dy * dy + dz * dz;
         const bool far = r2 >= reach2[j];
@@ -429,17 +433,28 @@ void SurfaceChargeSolver::fieldAndGradient(const Vec3d& x, Vec3d& H, Mat3d& J) c
         const float inv = 1.0f / std::sqrt(safe);
         const float inv2 = inv * inv;
         const float w = far ? q[j] * inv2 * inv : 0.0f; // q / r^3
-        hx += w * dx;
-        hy += w * dy;
-        hz += w * dz;
         const float w3 = 3.0f * w * inv2;
-        gxx += w - w3 * dx * dx;
-        gyy += w - w3 * dy * dy;
-        gzz += w - w3 * dz * dz;
-        gxy -= w3 * dx * dy;
-        gxz -= w3 * dx * dz;
-        gyz -= w3 * dy * dz;
+        acc[0][k] += w * dx;
+        acc[1][k] += w * dy;
+        acc[2][k] += w * dz;
+        acc[3][k] += w - w3 * dx * dx;
+        acc[4][k] += w - w3 * dy * dy;
+        acc[5][k] += w - w3 * dz * dz;
+        acc[6][k] -= w3 * dx * dy;
+        acc[7][k] -= w3 * dx * dz;
+        acc[8][k] -= w3 * dy * dz;
+    };
+    size_t j0 = 0;
+    for (; j0 + kLanes <= n; j0 += kLanes)
+        for (size_t k = 0; k < kLanes; ++k) panel(j0 + k, k);
+    for (size_t k = 0; j0 + k < n; ++k) panel(j0 + k, k);
+    float sum[9];
+    for (int c = 0; c < 9; ++c) {
+        sum[c] = 0;
+        for (size_t k = 0; k < kLanes; ++k) sum[c] += acc[c][k];
     }
+    const float hx = sum[0], hy = sum[1], hz = sum[2], gxx = sum[3], gyy = sum[4], gzz = sum[5], gxy = sum[6],
+                gxz = sum[7], gyz = sum[8];
     Vec3d h(hx, hy, hz);
     Mat3d g;
     g << gxx, gxy, gxz, gxy, gyy, gyz, gxz, gyz, gzz;
