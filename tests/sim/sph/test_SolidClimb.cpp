@@ -1,0 +1,249 @@
+// The climb (issue 51): fluid standing on a soft-iron frustum over a cored coil, at rest,
+// against the ferrohydrostatic Bernoulli law along its free surface, the same law the heap
+// keeps (test_FluidMagnetics.cpp): rho g z_s - mu0 (F(H) + M_n^2 / 2) is one constant over
+// the whole free surface, pool and coat. Reference: that law (Rosensweig, ch. 5), with H and
+// M just inside the surface from an evaluation of our own (the magnets' and the solids' field
+// at the surface point, the fluid's own as the particle reports it, M by the Langevin law).
+//
+// NOT YET PASSING, hence hidden (ferro_sph_tests "[.climb]", ~40 CPU minutes): the harness of
+// issue 51's climb must-show, kept for the next step. Measured 2026-12-07 at 4,000 particles
+// (0.8 mm): at 0.3 A the fluid rises 0.75 mm at the flank and rests (0.7 mm/s); at 0.45 A it
+// climbs the whole 10 mm frustum and coats its top, and after 1.5 s still moves at 7 mm/s RMS,
+// the law off by 49 Pa of a 110 Pa rise (45 %); at 0.6 A a particle leaves at 116 m/s at the
+// ramp's end (t = 0.4 s) and the sanity guard stops the run. FERRO_CLIMB_CURRENT sets the
+// current, FERRO_CLIMB_CSV writes the cells (r, z, rho g z, mu0 (F + Mn^2/2), residual).
+#include "sim/core/Constants.hpp"
+#include "sim/core/SceneDocument.hpp"
+#include "sim/magnetics/SolidCoupling.hpp"
+#include "sim/magnets/LangevinLaw.hpp"
+#include "sim/magnets/MagnetField.hpp"
+#include "sim/scene/SimSceneFile.hpp"
+#include "sim/spatial/HashGrid.hpp"
+#include "sim/sph/FluidMagnetics.hpp"
+#include "sim/sph/FluidSimulation.hpp"
+
+#include <catch2/catch.hpp>
+
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <cstdlib>
+#include <fstream>
+#include <map>
+#include <string>
+#include <vector>
+
+using namespace ferro;
+
+namespace {
+
+// A 15 mm dish with a 4 mm layer, a steel frustum (6 mm base radius, 2 mm top, 10 mm tall) on
+// its floor over a soft-iron core in a coil of 500 turns under the floor, the current ramped
+// to I over 0.4 s and held.
+std::string climbScene(long count, double current) {
+    return R"([shot]
+fps = 10
+duration = 3.0
+preroll = 0.0
+[fluid]
+rest_density = 1200.0
+viscosity = 5e-6
+surface_tension = 0.025
+[[fluid.block]]
+shape = "cylinder"
+center = [0.0, 0.0, 0.0]
+radius = 0.015
+height = 0.004
+count = )" + std::to_string(count) + R"(
+[container]
+type = "dish"
+center = [0.0, 0.0, 0.0]
+radius = 0.015
+height = 0.03
+[[magnets]]
+kind = "coil"
+position = [0.0, 0.0, -0.012]
+direction = [0.0, 0.0, 1.0]
+radius = 0.008
+length = 0.02
+turns = 500
+current = 0.0
+[[magnets.keys]]
+time = 0.0
+current = 0.0
+[[magnets.keys]]
+time = 0.4
+current = )" + std::to_string(current) + R"(
+[magnetization]
+susceptibility = 1.5
+saturation = 35000.0
+[[solids]]
+shape = "cone"
+radius = 0.006
+tip_radius = 0.002
+height = 0.010
+position = [0.0, 0.0, 0.0]
+permeability = 1000
+saturation = 1.6e6
+[[solids]]
+shape = "cylinder"
+radius = 0.006
+height = 0.02
+position = [0.0, 0.0, -0.0225]
+permeability = 1000
+saturation = 1.6e6
+)";
+}
+
+constexpr double kBase = 0.006, kTop = 0.002, kHeight = 0.010, kDish = 0.015;
+
+// Distance from (r, z) to the frustum's surface (outside it; negative inside), in the half plane.
+double frustumDistance(double r, double z) {
+    const double slope = (kBase - kTop) / kHeight; // dr/dz of the flank
+    const double c = 1.0 / std::sqrt(1 + slope * slope);
+    const double flank = (r - (kBase - slope * std::clamp(z, 0.0, kHeight))) * c;
+    if (z > kHeight) return r < kTop ? z - kHeight : std::hypot(r - kTop, z - kHeight);
+    return flank;
+}
+
+// One look at the free surface: per surface particle, its surface point (r, z) and the two
+// sides of the law there [Pa].
+struct SurfaceSample {
+    double r, z, gravity, magnetic;
+};
+
+std::vector<SurfaceSample> surfaceSamples(const FluidSimulation& sim) {
+    const double s = sim.spacing(), rho0 = sim.restDensity(), g = sim.scene().solver.gravity.norm();
+    const double chi0 = sim.scene().magnetization.susceptibility, Ms = sim.scene().magnetization.saturation;
+    const std::vector<Magnet> magnets = sim.magnetsNow();
+    const FluidMagnetics& mag = *sim.magnetics();
+    const SurfaceChargeSolver& solids = mag.solids()->solver();
+    const std::vector<Vec3>& xf = sim.positions();
+    std::vector<Vec3d> x(xf.size());
+    for (size_t i = 0; i < x.size(); ++i) x[i] = xf[i].cast<double>();
+    const HashGrid grid(x, 2 * s);
+    std::vector<SurfaceSample> out;
+    for (size_t i = 0; i < x.size(); ++i) {
+        // The outward direction: away from the neighbours within two spacings.
+        Vec3d inward = Vec3d::Zero();
+        grid.forEachWithin(x[i], 2 * s, [&](uint32_t j, double d2) {
+            if (j == i || d2 <= 0) return;
+            const double d = std::sqrt(d2), w = (1 - d / (2 * s)) * (1 - d / (2 * s));
+            inward += w * (x[j] - x[i]) / d;
+        });
+        if (!(inward.norm() > 0)) continue;
+        const Vec3d n = -inward.normalized();
+        // A surface particle has no neighbour within 1.5 spacings in its outward cone (40 deg).
+        bool covered = false;
+        grid.forEachWithin(x[i], 1.5 * s, [&](uint32_t j, double d2) {
+            if (j != i && d2 > 0 && (x[j] - x[i]).dot(n) > std::cos(40 * kPi / 180) * std::sqrt(d2)) covered = true;
+        });
+        if (covered) continue;
+        // Not a wetted wall: a spacing out along n is clear of the steel, the floor and the dish.
+        const Vec3d out1 = x[i] + s * n;
+        const double r1 = std::hypot(out1.x(), out1.y());
+        if (frustumDistance(r1, out1.z()) < 0.5 * s || out1.z() < 0.5 * s || r1 > kDish - 3 * s) continue;
+        // The surface point half a spacing out, its field: the magnets' and the solids' there,
+        // the fluid's own as at the particle.
+        const Vec3d xs = x[i] + 0.5 * s * n;
+        Vec3d hs, hi;
+        Mat3d J;
+        solids.fieldAndGradient(xs, hs, J);
+        solids.fieldAndGradient(x[i], hi, J);
+        const Vec3d own = mag.field()[i].cast<double>() - magnetField(magnets, x[i]) - hi;
+        const Vec3d H = magnetField(magnets, xs) + hs + own;
+        const double h = H.norm();
+        const double mn = h > 0 ? langevinMagnetization(h, chi0, Ms) * H.dot(n) / h : 0.0;
+        out.push_back({std::hypot(xs.x(), xs.y()), xs.z(), rho0 * g * xs.z(),
+                       kMu0 * (langevinEnergy(h, chi0, Ms) + 0.5 * mn * mn)});
+    }
+    return out;
+}
+
+struct ClimbCheck {
+    double rise = 0;    // rho g (highest cell - lowest cell) [Pa]
+    double worst = 0;   // largest |residual - mean| over the cells [Pa]
+    double coatTop = 0; // the highest surface point on the frustum's flank [m]
+    double pool = 0;    // the pool's level 10 mm and more from the axis [m]
+    size_t cells = 0;
+};
+
+// The law on cells one spacing square in (r, z), each the mean over every look's samples in
+// it (cells with at least `looks` samples).
+ClimbCheck climbCheck(const std::vector<std::vector<SurfaceSample>>& looks, double s, const char* csv) {
+    std::map<std::pair<int, int>, std::vector<const SurfaceSample*>> cells;
+    for (const auto& look : looks)
+        for (const SurfaceSample& p : look) cells[{int(p.r / s), int(p.z / s)}].push_back(&p);
+    struct Cell {
+        double r, z, gravity, magnetic;
+    };
+    std::vector<Cell> kept;
+    for (const auto& [key, samples] : cells) {
+        if (samples.size() < looks.size()) continue;
+        Cell c{0, 0, 0, 0};
+        for (const SurfaceSample* p : samples) {
+            c.r += p->r / samples.size();
+            c.z += p->z / samples.size();
+            c.gravity += p->gravity / samples.size();
+            c.magnetic += p->magnetic / samples.size();
+        }
+        kept.push_back(c);
+    }
+    ClimbCheck out;
+    out.cells = kept.size();
+    if (kept.empty()) return out;
+    double mean = 0, lo = 1e300, hi = -1e300, poolCells = 0;
+    for (const Cell& c : kept) {
+        if (c.r > 0.010) out.pool += c.z, ++poolCells;
+        mean += (c.gravity - c.magnetic) / kept.size();
+        lo = std::min(lo, c.gravity);
+        hi = std::max(hi, c.gravity);
+        if (frustumDistance(c.r, c.z) < 3 * s) out.coatTop = std::max(out.coatTop, c.z);
+    }
+    for (const Cell& c : kept) out.worst = std::max(out.worst, std::abs(c.gravity - c.magnetic - mean));
+    out.rise = hi - lo;
+    out.pool /= std::max(poolCells, 1.0);
+    if (csv) {
+        std::ofstream f(csv);
+        f << "# r [mm], z [mm], rho g z [Pa], mu0 (F + Mn^2/2) [Pa], residual - mean [Pa]\n";
+        for (const Cell& c : kept)
+            f << 1e3 * c.r << ' ' << 1e3 * c.z << ' ' << c.gravity << ' ' << c.magnetic << ' '
+              << c.gravity - c.magnetic - mean << '\n';
+    }
+    return out;
+}
+
+double rmsSpeed(const FluidSimulation& sim) {
+    double sum = 0;
+    for (const Vec3& v : sim.velocities()) sum += double(v.squaredNorm());
+    return std::sqrt(sum / double(std::max<size_t>(sim.size(), 1)));
+}
+
+ClimbCheck settledClimb(long count, double current, double& rms, double& spacing) {
+    FluidSimulation sim(parseSimScene(SceneDocument::parse(climbScene(count, current), "climb.toml")));
+    spacing = sim.spacing();
+    for (int frame = 1; frame <= 15; ++frame) sim.advanceTo(0.1 * frame);
+    rms = rmsSpeed(sim);
+    std::vector<std::vector<SurfaceSample>> looks{surfaceSamples(sim)};
+    for (int k = 1; k <= 10; ++k) {
+        sim.advanceTo(1.5 + 0.05 * k);
+        looks.push_back(surfaceSamples(sim));
+    }
+    return climbCheck(looks, sim.spacing(), std::getenv("FERRO_CLIMB_CSV"));
+}
+
+} // namespace
+
+TEST_CASE("fluid climbing a steel frustum over a cored coil rests on the ferrohydrostatic law", "[magnetics][solids][.climb]") {
+    double rms = 0, s = 0;
+    const double current = std::getenv("FERRO_CLIMB_CURRENT") ? std::atof(std::getenv("FERRO_CLIMB_CURRENT")) : 0.45;
+    const ClimbCheck c = settledClimb(4000, current, rms, s);
+    WARN("climb, 4,000 particles (" << 1e3 * s << " mm): rise " << c.rise << " Pa over " << c.cells
+                                  << " cells, worst deviation from the law " << c.worst << " Pa ("
+                                  << 100 * c.worst / c.rise << " %), coat top " << 1e3 * c.coatTop
+                                  << " mm over the pool at " << 1e3 * c.pool << " mm, RMS speed " << 1e3 * rms
+                                  << " mm/s");
+    CHECK(rms < 0.001);
+    CHECK(c.coatTop > c.pool + 2 * s); // the fluid climbs the flank above the pool
+    CHECK(c.worst < 0.10 * c.rise);
+}
