@@ -37,7 +37,14 @@ void addSolids(const std::vector<SolidParams>& solids, double spacing, const std
                             std::to_string(st.residual) + " after " + std::to_string(st.iterations) + " steps)");
     for (double q : solver->charge())
         if (!std::isfinite(q)) throw BadInputError(where + ": the solids' magnetization is not finite");
-    in.solidField = [solver](const Vec3d& x) { return solver->field(x); };
+    // The particles' path (one float pass, 0.2-0.3 % on the sphere): the spikes ask for the
+    // field at every vertex of the refined surface.
+    in.solidField = [solver](const Vec3d& x) {
+        Vec3d H;
+        Mat3d J;
+        solver->fieldAndGradient(x, H, J);
+        return H;
+    };
 }
 
 } // namespace ferro
