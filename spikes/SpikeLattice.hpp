@@ -68,9 +68,10 @@ struct Pattern {
 /// positions, its amplitude spikeAmplitude times the magnetization fade and its presence under
 /// P.defects, eq. 14, and its growth direction), pat.info.rings and pat.grid.
 /// On a surface with solids (SpikeFluid::solids) the tips are traced in rows, as a morphing
-/// lattice's are, and no tip stands closer than l / 2 to one of this pattern traced before it
-/// (a coat's lattice meets itself round the back of a solid) or closer than 0.8 l to a tip of
-/// the `earlier` patterns.
+/// lattice's are, no tip stands closer than 0.8 l to one of this pattern traced before it (a
+/// coat's lattice meets itself round the back of a solid) or to a tip of the `earlier`
+/// patterns, and a line ends where the surface's normal has turned more than 75 degrees from
+/// the origin's.
 void traceLattice(Pattern& pat, const FreeSurface& surface, const SurfaceFields& fields, const SpikeParams& P,
                   double Mc, double diagonal, const std::vector<Pattern>& earlier = {});
 

@@ -16,9 +16,10 @@
 //     stepped point meets the surface; tips between two axes interpolate the two n-th axis
 //     tips and are again dropped along the field line onto the surface.
 //     On a surface with solids (SpikeFluid::solids: a coat on a sculpture), the tips are
-//     traced in rows along the surface, no two closer than l / 2, and every part of the
-//     supercritical surface no pattern reached seeds a pattern of its own (its strongest-field
-//     vertex; SpikePattern::region). Surface within film_thickness of a solid (its bare wall,
+//     traced in rows along the surface, no two closer than 0.8 l, a line ends where the
+//     normal has turned 75 degrees from the origin's, and every part of the
+//     supercritical surface no pattern reached seeds a pattern of its own (at its vertex
+//     nearest its centroid; SpikePattern::region). Surface within film_thickness of a solid (its bare wall,
 //     a wetting film) is never spiky, and the field includes the solids' (SpikeSolids.hpp).
 //  4. Refinement: CGAL isotropic remeshing of the supercritical region to l / resolution.
 //  5. Displacement: each vertex gets the lattice coordinates of eq. 13 from its nearby tips
