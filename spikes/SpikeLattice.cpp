@@ -92,46 +92,40 @@ struct TraceFrame {
     }
 };
 
-// The tips traced so far; the first tip at lattice coordinates (i, j) wins. With gaps (a
-// surface with solids: a coat round a cylinder or a cone), a tip closer than ownGap to a tip
-// of this pattern already traced, or closer than otherGap to a tip of an earlier pattern
-// (`occupy(x, false)`), is not added: on a closed curved surface the lattice's lines meet
-// again round the back, where a flat lattice has no such place, and there the first tip wins;
-// and where two patterns' lattices meet the seam keeps most of a spacing (settleSeams merges
-// what still comes closer than 0.6 l).
+// The tips traced so far; the first tip at lattice coordinates (i, j) wins. With a gap (a
+// surface with solids: a coat round a cylinder or a cone), a tip closer than the gap to a tip
+// already traced, of this pattern or of an earlier one (`occupy`), is not added: on a closed
+// curved surface the lattice's lines meet again round the back, where a flat lattice has no
+// such place, and there the first tip wins; where two patterns' lattices meet the seam keeps
+// most of a spacing (settleSeams merges what still comes closer than 0.6 l).
 struct LatticeTips {
     std::vector<Tip> tips;
     std::unordered_map<int64_t, size_t> index; // latticeKey(i, j) -> tips
-    double ownGap = 0, otherGap = 0;           // [m]; 0 = no test
-    std::unordered_map<int64_t, std::vector<std::pair<Vec3d, bool>>> occupied; // cells -> (position, own)
+    double gap = 0;                            // [m]; 0 = no test
+    std::unordered_map<int64_t, std::vector<Vec3d>> occupied; // cells of size gap -> positions
 
-    double cell() const { return std::max(ownGap, otherGap); }
     int64_t cellKey(const Vec3d& x) const
     {
-        const double c = cell();
-        const int64_t i = int64_t(std::floor(x.x() / c)), j = int64_t(std::floor(x.y() / c)),
-                      k = int64_t(std::floor(x.z() / c));
+        const int64_t i = int64_t(std::floor(x.x() / gap)), j = int64_t(std::floor(x.y() / gap)),
+                      k = int64_t(std::floor(x.z() / gap));
         return (i * 73856093) ^ (j * 19349663) ^ (k * 83492791);
     }
     bool crowded(const Vec3d& x) const
     {
-        const double c = cell();
-        if (!(c > 0)) return false;
+        if (!(gap > 0)) return false;
         for (int a = -1; a <= 1; ++a)
             for (int b = -1; b <= 1; ++b)
-                for (int d = -1; d <= 1; ++d) {
-                    const auto it = occupied.find(cellKey(x + c * Vec3d(a, b, d)));
+                for (int c = -1; c <= 1; ++c) {
+                    const auto it = occupied.find(cellKey(x + gap * Vec3d(a, b, c)));
                     if (it == occupied.end()) continue;
-                    for (const auto& [y, own] : it->second) {
-                        const double gap = own ? ownGap : otherGap;
+                    for (const Vec3d& y : it->second)
                         if ((y - x).squaredNorm() < gap * gap) return true;
-                    }
                 }
         return false;
     }
-    void occupy(const Vec3d& x, bool own)
+    void occupy(const Vec3d& x)
     {
-        if (cell() > 0) occupied[cellKey(x)].push_back({x, own});
+        if (gap > 0) occupied[cellKey(x)].push_back(x);
     }
 };
 
@@ -140,7 +134,7 @@ void addTip(LatticeTips& lattice, int i, int j, const Vec3d& x, const Vec3d& n)
     if (lattice.index.count(latticeKey(i, j)) || lattice.crowded(x)) return;
     lattice.index[latticeKey(i, j)] = lattice.tips.size();
     lattice.tips.push_back({i, j, x, n, Eigen::Matrix<double, 2, 3>::Zero()});
-    lattice.occupy(x, true);
+    lattice.occupy(x);
 }
 
 bool tipPosition(const LatticeTips& lattice, int i, int j, Vec3d& x)
@@ -468,16 +462,26 @@ double spikeAmplitude(const SpikeParams& P, double field, double spacing)
 }
 
 bool nearestFreeHit(const FreeSurface& surface, const Vec3d& p, const Vec3d& d, double maxDistance, Vec3d& hit,
-                    Vec3d& normal)
+                    Vec3d& normal, bool aheadOnTie)
 {
-    for (const SurfaceRayCaster::Hit& h : surface.caster.lineHits(p, d)) {
+    const std::vector<SurfaceRayCaster::Hit> hits = surface.caster.lineHits(p, d);
+    const SurfaceRayCaster::Hit* chosen = nullptr;
+    for (const SurfaceRayCaster::Hit& h : hits) {
         if (std::abs(h.t) > maxDistance) break;
         if (!surface.isFree(surface.mesh.triangles[h.triangle])) continue;
-        hit = h.point;
-        normal = faceNormal(surface.mesh, h.triangle);
-        return true;
+        if (!chosen) {
+            chosen = &h;
+            if (!aheadOnTie) break;
+        } else if (std::abs(h.t) > 1.01 * std::abs(chosen->t)) {
+            break;
+        } else if (h.t > 0 && chosen->t < 0) {
+            chosen = &h;
+        }
     }
-    return false;
+    if (!chosen) return false;
+    hit = chosen->point;
+    normal = faceNormal(surface.mesh, chosen->triangle);
+    return true;
 }
 
 void traceLattice(Pattern& pat, const FreeSurface& surface, const SurfaceFields& fields, const SpikeParams& P,
@@ -501,10 +505,9 @@ void traceLattice(Pattern& pat, const FreeSurface& surface, const SurfaceFields&
     if (curved) frame.minCosTurn = std::cos(kMaxTurnDegrees * kPi / 180.0);
     LatticeTips lattice;
     if (curved) {
-        lattice.ownGap = 0.8 * l;
-        lattice.otherGap = 0.8 * l;
+        lattice.gap = 0.8 * l;
         for (const Pattern& other : earlier)
-            for (const Tip& tip : other.tips) lattice.occupy(tip.position, false);
+            for (const Tip& tip : other.tips) lattice.occupy(tip.position);
     }
     const int maxRings = int(std::ceil(diagonal / l)) + 1;
     // On a surface with solids the tips are traced in rows (every step a local one along the

@@ -28,8 +28,11 @@ struct FreeSurface {
 
 /// Where the line through p along d (non-zero) meets the free surface nearest to p, if no
 /// farther than maxDistance [m] from p: the point `hit` [m] and that triangle's unit normal.
+/// `aheadOnTie`: of two free hits within 1 % of the same distance, the one ahead along d (a
+/// line through the middle of a symmetric coat meets it twice; the nearest would go to
+/// whichever side the surface's noise favours); else the first found.
 bool nearestFreeHit(const FreeSurface& surface, const Vec3d& p, const Vec3d& d, double maxDistance, Vec3d& hit,
-                    Vec3d& normal);
+                    Vec3d& normal, bool aheadOnTie = false);
 
 /// Eq. 14's C0 [m] for the field |H| = field [A/m] and tip spacing [m]: beta |H|, capped at
 /// maxAspect spacing / 3 (the tip stands 3 C0 above the mean level), times heightGain.

@@ -100,29 +100,12 @@ bool patternOrigin(const PlacementContext& c, const Magnet& magnet, const Vec3d&
             anchor = sum / double(std::max<size_t>(count, 1));
         }
     }
-    if (c.in.fluid.solids) {
-        // A coat round a solid: the axis through the anchor often meets it twice at the same
-        // distance (a uniform field across a cylinder through its axis). The nearest hit then
-        // goes to whichever side the surface's noise favours, and the pattern to the other face
-        // from frame to frame: ties within 1 % go to the hit ahead along the axis.
-        const std::vector<SurfaceRayCaster::Hit> hits = c.surface.caster.lineHits(anchor, axisDir);
-        const SurfaceRayCaster::Hit* chosen = nullptr;
-        for (const SurfaceRayCaster::Hit& h : hits) {
-            if (!c.surface.isFree(input.triangles[h.triangle])) continue;
-            if (!chosen) chosen = &h;
-            else if (std::abs(h.t) <= 1.01 * std::abs(chosen->t) && h.t > 0 && chosen->t < 0) chosen = &h;
-            else if (std::abs(h.t) > 1.01 * std::abs(chosen->t)) break;
-        }
-        if (chosen) {
-            x0 = chosen->point;
-            const auto& t = input.triangles[chosen->triangle];
-            const Vec3d a = toD(input.vertices[t[0]]), b = toD(input.vertices[t[1]]), d = toD(input.vertices[t[2]]);
-            n0 = (b - a).cross(d - a).normalized();
-            return true;
-        }
-    } else if (nearestFreeHit(c.surface, anchor, axisDir, std::numeric_limits<double>::max(), x0, n0)) {
+    // A coat round a solid: the axis through the anchor often meets it twice at the same
+    // distance (a uniform field across a cylinder through its axis); the tie goes to the hit
+    // ahead along the axis, so the pattern does not change faces with the surface's noise.
+    if (nearestFreeHit(c.surface, anchor, axisDir, std::numeric_limits<double>::max(), x0, n0,
+                       c.in.fluid.solids != nullptr))
         return true;
-    }
     // The axis misses the fluid: anchor the pattern where this magnet's field is strongest.
     double best = -1;
     for (size_t v = 0; v < nIn; ++v) {

@@ -145,8 +145,6 @@ public:
     const MagnetizationParams& law() const { return law_; }
     /// The scene's magnetized solids (null without [[solids]]): their charge and field.
     const SolidCoupling* solids() const { return solids_.get(); }
-    /// The solids' field at each particle as the last step used it [A/m] (empty without solids).
-    const std::vector<Vec3>& solidField() const { return Hsol_; }
 
 private:
     bool solveIsStale() const;

@@ -88,6 +88,18 @@ SphereErrors sphereErrors(double mu, double edge) {
     return e;
 }
 
+// A coil of 500 turns, 2 cm long, on the z axis at height z [m], of radius [m] and current [A].
+Magnet upwardCoil(double z, double radius, double current) {
+    Magnet coil;
+    coil.kind = MagnetKind::Coil;
+    coil.position = Vec3d(0, 0, z);
+    coil.radius = radius;
+    coil.length = 0.02;
+    coil.turns = 500;
+    coil.strength = current;
+    return coil;
+}
+
 } // namespace
 
 TEST_CASE("a uniformly charged triangle's closed-form field matches quadrature", "[solids]") {
@@ -191,13 +203,7 @@ TEST_CASE("a saturating sphere: M bounded by Ms, the uniform solution of H = H0 
 TEST_CASE("the solve stays well conditioned up to mu_r 1e5: a cone in a coil's field takes as many GMRES steps", "[solids]") {
     // The deflated conductor mode keeps the spectrum away from 0 as lambda -> 1: measured
     // 12, 14 and 14 steps to 1e-6 at mu_r 10, 1e3 and 1e5 (1,462 panels).
-    Magnet coil;
-    coil.kind = MagnetKind::Coil;
-    coil.position = Vec3d(0, 0, -0.015);
-    coil.radius = 0.012;
-    coil.length = 0.02;
-    coil.turns = 500;
-    coil.strength = 2.0;
+    const Magnet coil = upwardCoil(-0.015, 0.012, 2.0);
     const ShapeMesh cone = makeCone(0.008, 0.0005, 0.025, 0.0015);
     std::vector<int> iterations;
     for (double mu : {10.0, 1e3, 1e5}) {
@@ -231,24 +237,14 @@ TEST_CASE("the solids' field at points is a gradient: no mean swirl round an axi
     // a panel changes rule, and a mesh whose triangles all lean one way adds the jumps up
     // round the circle. Reference: 0; bound 1e-3 of the mean |grad|H|| (measured at most
     // 3.1e-4 over these circles, 1 to 4.5 mm above the floor).
-    Magnet coil;
-    coil.kind = MagnetKind::Coil;
-    coil.position = Vec3d(0, 0, -0.012);
-    coil.radius = 0.008;
-    coil.length = 0.02;
-    coil.turns = 500;
-    coil.strength = 4.0;
-    std::vector<SolidSurface> surfaces;
-    for (const auto& [radius, height, z] : {std::make_tuple(0.006, 0.02, -0.0225)}) {
-        const ShapeMesh m = makeCylinder(radius, height, 0.00247);
-        SolidSurface s;
-        for (const Vec3d& v : m.vertices) s.vertices.push_back(v + Vec3d(0, 0, z));
-        s.triangles = m.triangles;
-        s.permeability = 1000;
-        surfaces.push_back(s);
-    }
+    const Magnet coil = upwardCoil(-0.012, 0.008, 4.0);
+    const ShapeMesh core = makeCylinder(0.006, 0.02, 0.00247);
+    SolidSurface s;
+    for (const Vec3d& v : core.vertices) s.vertices.push_back(v + Vec3d(0, 0, -0.0225));
+    s.triangles = core.triangles;
+    s.permeability = 1000;
     SurfaceChargeSolver solver;
-    solver.setSurfaces(surfaces);
+    solver.setSurfaces({s});
     REQUIRE(solver.solve([&](const Vec3d& p) { return magnetField(coil, p); }).converged);
     for (const auto& [r, z] : {std::make_pair(0.0036, 0.001), std::make_pair(0.0044, 0.002), std::make_pair(0.0036, 0.006),
                                std::make_pair(0.0034, 0.0004), std::make_pair(0.006, 0.0005), std::make_pair(0.008, 0.001),
