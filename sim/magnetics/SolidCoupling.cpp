@@ -8,7 +8,7 @@
 namespace ferro {
 
 SolidCoupling::SolidCoupling(const std::vector<SolidParams>& solids, double spacing, const std::string& where)
-    : solids_(solids) {
+    : solids_(solids), standoff_(0.5 * spacing) {
     for (const SolidParams& s : solids_) {
         const double edge = s.panelSize > 0 ? s.panelSize : 2.0 * spacing;
         shapes_.push_back(solidShape(s, edge, where));
@@ -56,7 +56,7 @@ void SolidCoupling::fieldAt(const std::vector<Vec3>& x, std::vector<Vec3>& H, st
     forEachParticle(n, [&](size_t i) {
         Vec3d h;
         Mat3d g;
-        solver_.fieldAndGradient(x[i].cast<double>(), h, g);
+        solver_.fieldAndGradient(x[i].cast<double>(), h, g, standoff_);
         H[i] = h.allFinite() ? Vec3(h.cast<Real>()) : Vec3(Vec3::Zero());
         J[i] = g.allFinite() ? Eigen::Matrix3f(g.cast<float>()) : Eigen::Matrix3f(Eigen::Matrix3f::Zero());
     });

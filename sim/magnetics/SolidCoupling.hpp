@@ -60,7 +60,9 @@ public:
 
     /// Between solves, every step: the solids' field H [A/m] and Jacobian J [A/m^2] at the
     /// particles' positions x now, from the last update's charge. Nothing (H and J left as
-    /// they are) before the first update.
+    /// they are) before the first update. A particle within half a spacing of a solid (or in
+    /// it) sees the field half a spacing off the wall (SurfaceChargeSolver::fieldAndGradient's
+    /// standoff).
     void fieldAt(const std::vector<Vec3>& x, std::vector<Vec3>& H, std::vector<Eigen::Matrix3f>& J) const;
 
     const SurfaceChargeSolver& solver() const { return solver_; }
@@ -71,6 +73,7 @@ private:
     SurfaceChargeSolver solver_;
     double posedTime_ = -1;   // the time the panels were last placed (moving solids re-place)
     bool moving_ = false;
+    double standoff_ = 0;     // [m] half a spacing
 };
 
 } // namespace ferro

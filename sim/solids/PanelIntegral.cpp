@@ -67,4 +67,24 @@ Mat3d uniformTriangleGradient(const Vec3d& x, const Vec3d& a, const Vec3d& b, co
     return J;
 }
 
+Vec3d closestPointOnTriangle(const Vec3d& x, const Vec3d& a, const Vec3d& b, const Vec3d& c) {
+    const Vec3d ab = b - a, ac = c - a, ax = x - a;
+    const double d1 = ab.dot(ax), d2 = ac.dot(ax);
+    if (d1 <= 0 && d2 <= 0) return a;
+    const Vec3d bx = x - b;
+    const double d3 = ab.dot(bx), d4 = ac.dot(bx);
+    if (d3 >= 0 && d4 <= d3) return b;
+    const double vc = d1 * d4 - d3 * d2;
+    if (vc <= 0 && d1 >= 0 && d3 <= 0) return a + ab * (d1 / (d1 - d3));
+    const Vec3d cx = x - c;
+    const double d5 = ab.dot(cx), d6 = ac.dot(cx);
+    if (d6 >= 0 && d5 <= d6) return c;
+    const double vb = d5 * d2 - d1 * d6;
+    if (vb <= 0 && d2 >= 0 && d6 <= 0) return a + ac * (d2 / (d2 - d6));
+    const double va = d3 * d6 - d5 * d4;
+    if (va <= 0 && (d4 - d3) >= 0 && (d5 - d6) >= 0) return b + (c - b) * ((d4 - d3) / ((d4 - d3) + (d5 - d6)));
+    const double denom = 1.0 / (va + vb + vc);
+    return a + ab * (vb * denom) + ac * (vc * denom);
+}
+
 } // namespace ferro

@@ -33,4 +33,8 @@ Vec3d uniformTriangleField(const Vec3d& x, const Vec3d& a, const Vec3d& b, const
 /// ~1e-8 away from T's rim).
 Mat3d uniformTriangleGradient(const Vec3d& x, const Vec3d& a, const Vec3d& b, const Vec3d& c);
 
+/// The point of the triangle (a, b, c) nearest to x (Ericson, Real-Time Collision Detection,
+/// 5.1.5: by the Voronoi regions of its corners, edges and face).
+Vec3d closestPointOnTriangle(const Vec3d& x, const Vec3d& a, const Vec3d& b, const Vec3d& c);
+
 } // namespace ferro

@@ -400,13 +400,8 @@ int SurfaceChargeSolver::solveInterior() const {
 
 Vec3d SurfaceChargeSolver::field(const Vec3d& x) const { return kInv4Pi * densityField(sigma_, x); }
 
-void SurfaceChargeSolver::fieldAndGradient(const Vec3d& x, Vec3d& H, Mat3d& J) const {
+void SurfaceChargeSolver::pointSum(const Vec3d& x, Vec3d& h, Mat3d& g, std::vector<uint32_t>& near) const {
     const size_t n = centroid_.size();
-    if (sigma_.size() != n || pq_.size() != n) { // nothing solved: no charge
-        H.setZero();
-        J.setZero();
-        return;
-    }
     // Pass 1, branch-free over every panel (float, centroids about origin_): the point-charge
     // field and Jacobian of the panels beyond kPointRuleReach radii, and a flag for the rest.
     // Eight lanes of partial sums, panel j into lane j % 8, added in a fixed order at the end:
@@ -455,13 +450,16 @@ void SurfaceChargeSolver::fieldAndGradient(const Vec3d& x, Vec3d& H, Mat3d& J) c
     }
     const float hx = sum[0], hy = sum[1], hz = sum[2], gxx = sum[3], gyy = sum[4], gzz = sum[5], gxy = sum[6],
                 gxz = sum[7], gyz = sum[8];
-    Vec3d h(hx, hy, hz);
-    Mat3d g;
+    h = Vec3d(hx, hy, hz);
     g << gxx, gxy, gxz, gxy, gyy, gyz, gxz, gyz, gzz;
-    // Pass 2: the near panels by their closed form (within kPointExactReach radii) or the
-    // 3-point rule.
-    for (size_t j = 0; j < n; ++j) {
-        if (flag[j] == 0.0f) continue;
+    near.clear();
+    for (size_t j = 0; j < n; ++j)
+        if (flag[j] != 0.0f) near.push_back(uint32_t(j));
+}
+
+void SurfaceChargeSolver::addNearPanels(const Vec3d& x, const std::vector<uint32_t>& near, Vec3d& h, Mat3d& g) const {
+    // The near panels by their closed form (within kPointExactReach radii) or the 3-point rule.
+    for (const uint32_t j : near) {
         const double d = sigma_[j];
         if (d == 0) continue;
         const double dist = (x - centroid_[j]).norm();
@@ -478,6 +476,54 @@ void SurfaceChargeSolver::fieldAndGradient(const Vec3d& x, Vec3d& H, Mat3d& J) c
             g += inv3 * (Mat3d::Identity() - 3.0 * ry * ry.transpose() / s2);
         }
     }
+}
+
+void SurfaceChargeSolver::fieldAndGradient(const Vec3d& x, Vec3d& H, Mat3d& J, double standoff) const {
+    const size_t n = centroid_.size();
+    if (sigma_.size() != n || pq_.size() != n) { // nothing solved: no charge
+        H.setZero();
+        J.setZero();
+        return;
+    }
+    thread_local std::vector<uint32_t> near;
+    Vec3d h;
+    Mat3d g;
+    pointSum(x, h, g, near);
+    if (standoff > 0) {
+        // The nearest surface point among the panels that can be within the standoff (each
+        // such panel is a near one: kPointRuleReach radii exceed radius + standoff for any
+        // standoff under 5 radii; a larger one still finds the nearest of these).
+        double best = standoff;
+        Vec3d foot = Vec3d::Zero(), normal = Vec3d::Zero();
+        bool inside = false;
+        for (const uint32_t j : near) {
+            if ((x - centroid_[j]).norm() > radius_[j] + best) continue;
+            const Vec3d p = closestPointOnTriangle(x, corner_[j][0], corner_[j][1], corner_[j][2]);
+            const double d = (x - p).norm();
+            if (d < best) {
+                best = d;
+                foot = p;
+                // Outside, the direction from the foot (the distance field's gradient: the
+                // moved point is continuous across an edge or corner between panels of
+                // different normals); inside or on the surface, the panel's normal.
+                inside = normal_[j].dot(x - p) <= 1e-3 * standoff;
+                normal = inside ? normal_[j] : Vec3d((x - p) / d);
+            }
+        }
+        if (best < standoff || inside) {
+            // Evaluated at the moved point x' = foot + standoff n. On a panel's face (and
+            // about an edge, along it) dx'/dx = P = I - n n^T, and the callers use J as J v (J symmetric: grad|H| =
+            // J H / |H|, (M . grad) H = J M), so J = P J(x') gives the exact gradient of the
+            // moved field, P J(x') H / |H|: the force stays conservative.
+            const Vec3d xs = foot + standoff * normal;
+            pointSum(xs, h, g, near);
+            addNearPanels(xs, near, h, g);
+            H = kInv4Pi * h;
+            J = kInv4Pi * (Mat3d::Identity() - normal * normal.transpose()) * g;
+            return;
+        }
+    }
+    addNearPanels(x, near, h, g);
     H = kInv4Pi * h;
     J = kInv4Pi * g;
 }

@@ -119,7 +119,14 @@ public:
     /// The field and its Jacobian at x in one float pass over the panels with the tighter
     /// kPoint* reaches: the particles' path, as accurate as field() on a sphere (0.2-0.3 %,
     /// the Jacobian within 0.7 % of the dipole's; tests/sim/solids). Zero before a solve.
-    void fieldAndGradient(const Vec3d& x, Vec3d& H, Mat3d& J) const;
+    ///
+    /// `standoff` [m] > 0: a point nearer the solids' surface than that (or inside) takes the
+    /// field at the nearest surface point moved `standoff` out along its panel's normal, and
+    /// the Jacobian of that map (the tangential part of J there): what a fluid particle, a
+    /// parcel a spacing across, sees at a wall. Without it a particle touching the wall sat
+    /// on the flat panels' edges, where the piecewise-constant charge's field has a
+    /// logarithmic spike: a Morpho Tower preview flung particles off the blade at 1,000 g.
+    void fieldAndGradient(const Vec3d& x, Vec3d& H, Mat3d& J, double standoff = 0) const;
     /// The total field H [A/m] at x inside a solid (applied plus own), from the interior layer.
     Vec3d interiorField(const Vec3d& x) const;
 
@@ -141,6 +148,11 @@ private:
     // Principal-value field at every collocation point of the density `d` (one value a panel),
     // without 1/(4 pi).
     void collocationField(const std::vector<double>& d, std::vector<Vec3d>& out) const;
+    // fieldAndGradient at x without a standoff, without 1/(4 pi); the panels within
+    // kPointRuleReach radii of x in `near`.
+    void pointSum(const Vec3d& x, Vec3d& h, Mat3d& g, std::vector<uint32_t>& near) const;
+    // The near panels' exact field added to a far sum.
+    void addNearPanels(const Vec3d& x, const std::vector<uint32_t>& near, Vec3d& h, Mat3d& g) const;
     // The field of density d at an arbitrary point, without 1/(4 pi).
     Vec3d densityField(const std::vector<double>& d, const Vec3d& x) const;
     // Each body's total charge of the density d (area-weighted sum over its panels).
