@@ -54,16 +54,53 @@ Vec3d uniformTriangleField(const Vec3d& x, const Vec3d& a, const Vec3d& b, const
     return I;
 }
 
+namespace {
+
+// The gradient of edgeLogIntegral's value in x, in the same three forms (each the derivative
+// of its own expression: R' = (x - p) / R, s' = -t, (d^2)' = -2 w with w = p - x - s_p t).
+Vec3d edgeLogGradient(const Vec3d& x, const Vec3d& p, const Vec3d& q) {
+    Vec3d t = q - p;
+    const double len = t.norm();
+    if (!(len > 0)) return Vec3d::Zero();
+    t /= len;
+    const Vec3d dp = p - x, dq = q - x;
+    const double sp = dp.dot(t), sq = dq.dot(t);
+    const double Rp = dp.norm(), Rq = dq.norm();
+    const Vec3d up = -dp / Rp, uq = -dq / Rq; // (x - p) / R_p, (x - q) / R_q
+    if (sp >= 0) return (uq - t) / (Rq + sq) - (up - t) / (Rp + sp);
+    if (sq <= 0) return (up + t) / (Rp - sp) - (uq + t) / (Rq - sq);
+    const Vec3d w = dp - sp * t;
+    const double d2 = w.squaredNorm();
+    const Vec3d dlog = d2 > 1e-18 * len * len ? Vec3d(-2.0 * w / d2) : Vec3d::Zero();
+    return (uq - t) / (Rq + sq) + (up + t) / (Rp - sp) - dlog;
+}
+
+} // namespace
+
 Mat3d uniformTriangleGradient(const Vec3d& x, const Vec3d& a, const Vec3d& b, const Vec3d& c) {
-    const double scale = (x - (a + b + c) / 3.0).norm();
+    // dI/dx of uniformTriangleField, term by term: the edge logarithms' gradients (above) and
+    // the solid angle's, which is the field of the rim as a unit current loop (the segment
+    // Biot-Savart law: for a = p - x, b = q - x, (a x b)(|a| + |b|) / (|a||b|(|a||b| + a.b))).
+    const Vec3d nRaw = (b - a).cross(c - a);
+    const double n2 = nRaw.norm();
     Mat3d J = Mat3d::Zero();
-    if (!(scale > 0)) return J;
-    const double h = 1e-6 * scale;
-    for (int j = 0; j < 3; ++j) {
-        Vec3d s = Vec3d::Zero();
-        s[j] = h;
-        J.col(j) = (uniformTriangleField(x + s, a, b, c) - uniformTriangleField(x - s, a, b, c)) / (2 * h);
+    if (!(n2 > 0)) return J;
+    const Vec3d n = nRaw / n2;
+    const Vec3d* v[3] = {&a, &b, &c};
+    Vec3d gradOmega = Vec3d::Zero();
+    for (int k = 0; k < 3; ++k) {
+        const Vec3d& p = *v[k];
+        const Vec3d& q = *v[(k + 1) % 3];
+        const Vec3d t = q - p;
+        if (!(t.squaredNorm() > 0)) continue;
+        J += t.normalized().cross(n) * edgeLogGradient(x, p, q).transpose();
+        const Vec3d ra = p - x, rb = q - x;
+        const double la = ra.norm(), lb = rb.norm();
+        const double den = la * lb * (la * lb + ra.dot(rb));
+        if (den > 0) gradOmega += ra.cross(rb) * ((la + lb) / den);
     }
+    // I carries -Omega n with Omega = 2 atan2(triple, denom) (uniformTriangleField).
+    J -= n * gradOmega.transpose();
     return J;
 }
 

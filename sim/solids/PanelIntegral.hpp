@@ -28,9 +28,9 @@ using Mat3d = Eigen::Matrix3d;
 /// +-n/2 sigma is the caller's), the in-plane part is kept.
 Vec3d uniformTriangleField(const Vec3d& x, const Vec3d& a, const Vec3d& b, const Vec3d& c, bool onPanel = false);
 
-/// The Jacobian dI_i/dx_j of uniformTriangleField at x (off T), by central differences of
-/// the closed form with a step 1e-6 times the distance to T's centroid (relative accuracy
-/// ~1e-8 away from T's rim).
+/// The Jacobian dI_i/dx_j of uniformTriangleField at x (off T's rim), in closed form: the
+/// edge logarithms' gradients and the solid angle's (the rim's segment Biot-Savart law).
+/// Matches central differences of the field to their own accuracy (tests/sim/solids).
 Mat3d uniformTriangleGradient(const Vec3d& x, const Vec3d& a, const Vec3d& b, const Vec3d& c);
 
 /// The point of the triangle (a, b, c) nearest to x (Ericson, Real-Time Collision Detection,

@@ -170,6 +170,29 @@ void SurfaceChargeSolver::setSurfaces(const std::vector<SolidSurface>& surfaces)
         preach2_[j] = float(kPointRuleReach * radius_[j] * kPointRuleReach * radius_[j]);
     }
     pq_.clear(); // no charge until a solve
+    tree_ = PanelTree();
+    if (params_.openingAngle > 0 && n >= params_.treeMinPanels) {
+        std::vector<PanelTree::Panel> panels(n);
+        for (size_t j = 0; j < n; ++j) {
+            PanelTree::Panel& p = panels[j];
+            p.centroid = centroid_[j];
+            p.radius = radius_[j];
+            p.expandReach = kPointExactReach * radius_[j];
+            p.pointReach = kPointRuleReach * radius_[j];
+            // A uniform triangle's second moment about its centroid: its 3-point rule's, the
+            // points halfway from the centroid to the corners, (1/12) sum (v - c)(v - c)^T.
+            for (const Vec3d& v : corner_[j]) {
+                const Vec3d d = v - centroid_[j];
+                p.second[0] += d.x() * d.x() / 12;
+                p.second[1] += d.y() * d.y() / 12;
+                p.second[2] += d.z() * d.z() / 12;
+                p.second[3] += d.x() * d.y() / 12;
+                p.second[4] += d.x() * d.z() / 12;
+                p.second[5] += d.y() * d.z() / 12;
+            }
+        }
+        tree_.build(panels);
+    }
     // The normal operator as a dense float matrix when it fits (kDenseLimit panels, 151 MB):
     // a GMRES step is then a matrix-vector product instead of the O(P^2) pair sweep.
     dense_.resize(0, 0);
@@ -378,7 +401,20 @@ SurfaceChargeSolver::Stats SurfaceChargeSolver::solve(const std::function<Vec3d(
     }
     // The charges of fieldAndGradient's float pass.
     pq_.resize(n);
-    for (size_t j = 0; j < n; ++j) pq_[j] = float(sigma_[j] * area_[j]);
+    std::vector<double> q(n);
+    double s2 = 0, area = 0;
+    for (size_t j = 0; j < n; ++j) {
+        q[j] = sigma_[j] * area_[j];
+        pq_[j] = float(q[j]);
+        s2 += sigma_[j] * sigma_[j] * area_[j];
+        area += area_[j];
+    }
+    if (!tree_.empty()) {
+        tree_.setCharges(q);
+        // The field at the surface is of the order of the charge density (H_n outside = sigma
+        // + H_n inside); 4 pi: the sums carry no 1/(4 pi).
+        treeTolerance_ = params_.treeTolerance * 4.0 * kPi * std::sqrt(s2 / std::max(area, 1e-300));
+    }
     return st;
 }
 
@@ -402,6 +438,13 @@ Vec3d SurfaceChargeSolver::field(const Vec3d& x) const { return kInv4Pi * densit
 
 void SurfaceChargeSolver::pointSum(const Vec3d& x, Vec3d& h, Mat3d& g, std::vector<uint32_t>& near) const {
     const size_t n = centroid_.size();
+    if (!tree_.empty()) {
+        near.clear();
+        h.setZero();
+        g.setZero();
+        tree_.evaluate(x, params_.openingAngle, treeTolerance_, h, g, near);
+        return;
+    }
     // Pass 1, branch-free over every panel (float, centroids about origin_): the point-charge
     // field and Jacobian of the panels beyond kPointRuleReach radii, and a flag for the rest.
     // Eight lanes of partial sums, panel j into lane j % 8, added in a fixed order at the end:

@@ -35,12 +35,14 @@
 // (degree 2) within kRuleReach; a point charge at the centroid beyond; and each panel adds
 // the curved surface's own term its flat shape lacks (curvatureTerms in the .cpp). The
 // normal operator is kept as a dense float matrix up to kDenseLimit panels. The field at a
-// point (fieldAndGradient, the particles' path) uses the tighter kPoint* reaches in one
-// float pass. Convergence with the panel count: tests/sim/solids.
+// point (fieldAndGradient, the particles' path) uses the tighter kPoint* reaches, its far
+// panels through PanelTree (or one float pass over all below Params::treeMinPanels).
+// Convergence with the panel count: tests/sim/solids.
 //
-// Units: SI (m, A/m); double precision, except the dense operator and the point pass (float:
-// the fluid's field tolerance is 1e-2).
+// Units: SI (m, A/m); double precision, except the dense operator and the point pass's float
+// sum over every panel (the fluid's field tolerance is 1e-2).
 #include "sim/solids/PanelIntegral.hpp"
+#include "sim/solids/PanelTree.hpp"
 
 #include <Eigen/Core>
 
@@ -79,6 +81,14 @@ public:
         double tolerance = 1e-6;
         int maxIterations = 400;   ///< operator applications per linear solve
         int saturationSteps = 30;  ///< most secant updates with a saturation
+        /// fieldAndGradient's tree (PanelTree): a cell of radius R at distance d is one
+        /// expansion when R < openingAngle d and its error bound is under treeTolerance times
+        /// the RMS surface charge (the field's scale at the surface): within 1e-4 of the sum
+        /// over every panel (tests/sim/solids). openingAngle 0: every panel summed.
+        double openingAngle = 0.5;
+        double treeTolerance = 1e-4;
+        /// Fewer panels than this: the direct sum (the tree does not pay).
+        size_t treeMinPanels = 1024;
     };
 
     struct Stats {
@@ -116,12 +126,14 @@ public:
     /// The solids' own field H_s [A/m] at x [m] outside every solid (inside it is H_s too,
     /// but that is the cancelling part; use interiorField there).
     Vec3d field(const Vec3d& x) const;
-    /// The field and its Jacobian at x in one float pass over the panels with the tighter
-    /// kPoint* reaches: the particles' path, as accurate as field() on a sphere (0.2-0.3 %,
-    /// the Jacobian within 0.7 % of the dipole's; tests/sim/solids). Zero before a solve.
+    /// The field and its Jacobian at x with the tighter kPoint* reaches, the far panels by
+    /// the tree: the particles' path, as accurate as field() on a sphere (0.2-0.3 %, the
+    /// Jacobian within 0.7 % of the dipole's; tests/sim/solids). Zero before a solve. A
+    /// function of x alone, the same bits on any thread.
     ///
     /// `standoff` [m] > 0: a point nearer the solids' surface than that (or inside) takes the
-    /// field at the nearest surface point moved `standoff` out along its panel's normal, and
+    /// field at the nearest surface point moved `standoff` out (along the direction from it,
+    /// or the panel's normal from inside), and
     /// the Jacobian of that map (the tangential part of J there): what a fluid particle, a
     /// parcel a spacing across, sees at a wall. Without it a particle touching the wall sat
     /// on the flat panels' edges, where the piecewise-constant charge's field has a
@@ -186,6 +198,8 @@ private:
     Eigen::MatrixXf dense_;                       // the normal operator (P <= kDenseLimit)
     Vec3d origin_{0, 0, 0};                       // fieldAndGradient's float arrays: centroids
     std::vector<float> pcx_, pcy_, pcz_, pq_, preach2_; // about origin_, charge, near reach^2
+    PanelTree tree_;                              // the far field at points (Params::openingAngle > 0)
+    double treeTolerance_ = 0;                    // its absolute error bound, in the sums' units
 };
 
 } // namespace ferro

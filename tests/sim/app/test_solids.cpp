@@ -184,8 +184,12 @@ TEST_CASE("a pool over a cored coil gains no spin: the axisymmetric scene exerts
     // symmetric about it, so no force on the fluid has a net moment there and the pool, at rest
     // at the start, keeps L_z = 0 up to the solve's tolerance. A field carried with each
     // particle from where it was last evaluated is no gradient field, and it spun this pool at
-    // 0.73-0.92 m/s in 0.5 s (issue 51's climb). Reference: L_z = 0, bound: a mean azimuthal
-    // speed under 1 % of the fastest particle's (measured 0.35 % at 0.25 s).
+    // 0.73-0.92 m/s in 0.5 s (issue 51's climb), a coherent spin (mean azimuthal speed about
+    // the RMS speed); so did a core whose triangles all leaned one way round the axis (1-7
+    // mm/s, up to 44 % of the RMS speed, SolidShapes.cpp). Reference: L_z = 0, bound: a mean
+    // azimuthal speed under 10 % of the RMS speed. Measured with the mirror-symmetric core at
+    // 1,440 / 1,500 / 1,560 / 1,620 particles: 0.09 / 0.24 / 2.5 / 2.9 % (either sign: the
+    // flow's own symmetry breaking, chaotic in the particle count).
     TempDir dir("solids_spin");
     const std::string scene = dir.write("core.toml", pool(R"([[solids]]
 shape = "cylinder"
@@ -206,13 +210,15 @@ current = 4.0
     REQUIRE(r.code == kExitOk);
     const ParticleTable t = readParticleFile(dir.file("out/particles_0001.ply"));
     const std::vector<Vec3> x = t.vec3("x", "y", "z"), v = t.vec3("vx", "vy", "vz");
-    double swirl = 0, fastest = 0;
+    double swirl = 0, fastest = 0, rms = 0;
     for (size_t i = 0; i < x.size(); ++i) {
         const double r = std::hypot(double(x[i].x()), double(x[i].y()));
         if (r > 0) swirl += (double(x[i].x()) * v[i].y() - double(x[i].y()) * v[i].x()) / r / double(x.size());
         fastest = std::max(fastest, double(v[i].norm()));
+        rms += double(v[i].squaredNorm()) / double(x.size());
     }
-    WARN("mean azimuthal speed " << swirl << " m/s, fastest particle " << fastest << " m/s");
+    rms = std::sqrt(rms);
+    WARN("mean azimuthal speed " << swirl << " m/s, fastest particle " << fastest << " m/s, RMS speed " << rms << " m/s");
     CHECK(fastest > 0.05); // the coil pulls hard: the fluid moves
-    CHECK(std::abs(swirl) < 0.01 * fastest);
+    CHECK(std::abs(swirl) < 0.1 * rms);
 }

@@ -148,8 +148,8 @@ std::vector<SurfaceSample> surfaceSamples(const FluidSimulation& sim) {
         const Vec3d xs = x[i] + 0.5 * s * n;
         Vec3d hs, hi;
         Mat3d J;
-        solids.fieldAndGradient(xs, hs, J);
-        solids.fieldAndGradient(x[i], hi, J);
+        solids.fieldAndGradient(xs, hs, J, 0.5 * s); // the standoff the simulation's particles read with
+        solids.fieldAndGradient(x[i], hi, J, 0.5 * s);
         const Vec3d own = mag.field()[i].cast<double>() - magnetField(magnets, x[i]) - hi;
         const Vec3d H = magnetField(magnets, xs) + hs + own;
         const double h = H.norm();
