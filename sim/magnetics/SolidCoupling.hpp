@@ -70,7 +70,15 @@ public:
 private:
     std::vector<SolidParams> solids_;
     std::vector<ShapeMesh> shapes_;
-    SurfaceChargeSolver solver_;
+    SurfaceChargeSolver solver_{couplingParams()};
+    // The charge solve to 1e-4 (the solver's own default, 1e-6, is for its analytic tests):
+    // a hundred times under the fluid's magnetization tolerance, and a third of the GMRES
+    // steps at a coil's held current.
+    static SurfaceChargeSolver::Params couplingParams() {
+        SurfaceChargeSolver::Params p;
+        p.tolerance = 1e-4;
+        return p;
+    }
     double posedTime_ = -1;   // the time the panels were last placed (moving solids re-place)
     bool moving_ = false;
     double standoff_ = 0;     // [m] half a spacing
