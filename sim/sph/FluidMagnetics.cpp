@@ -235,14 +235,20 @@ void FluidMagnetics::update(double t, const std::vector<Vec3>& x, const SurfaceP
     H_.resize(n, Vec3::Zero());
     M_.resize(n, Vec3::Zero());
     Hind_.resize(n, Vec3::Zero());
-    // The solids' field at the particles' positions now, from the last solve's charge
-    // (SolidCoupling::fieldAt; none before the first solve, which a resumed run's first step
-    // always is).
-    if (solids_ && Hsol_.size() == n) solids_->fieldAt(x, Hsol_, Jsol_);
-    forEachParticle(n, [&](size_t i) {
-        Hext_[i] = magnetField(magnets_, x[i].cast<double>()).cast<Real>();
-        if (Hsol_.size() == n) Hext_[i] += Hsol_[i];
-    });
+    // The solids' field (SolidCoupling; none before the first solve, which a resumed run's
+    // first step always is) is evaluated once a step at the positions now: by the solve when
+    // there is one (it solves the charge first), else below. Whether to solve is decided
+    // with the last step's values, one step's motion old (Hsol_ follows the particle order):
+    // evaluating it twice on a solve step was a third of the step at a coil's held current.
+    const bool solids = solids_ && Hsol_.size() == n;
+    auto applied = [&] {
+        forEachParticle(n, [&](size_t i) {
+            Hext_[i] = magnetField(magnets_, x[i].cast<double>()).cast<Real>();
+            if (Hsol_.size() == n) Hext_[i] += Hsol_[i];
+        });
+    };
+    if (solids && !magnetic()) solids_->fieldAt(x, Hsol_, Jsol_);
+    applied();
     ++stats_.steps;
     auto largest = [&](const std::vector<Vec3>& field) {
         return std::sqrt(double(tbb::parallel_reduce(
@@ -268,6 +274,11 @@ void FluidMagnetics::update(double t, const std::vector<Vec3>& x, const SurfaceP
     const bool solving = forceSolve || solveIsStale();
     if (solving) {
         solve(x, surfaceOnce, forceSolve);
+    } else if (solids) {
+        solids_->fieldAt(x, Hsol_, Jsol_);
+        applied();
+        extNow2_ = deterministicSum(n, [&](size_t i) { return double(Hext_[i].squaredNorm()); });
+        inducedScale_ = extSolved2_ > 0 ? std::sqrt(extNow2_ / extSolved2_) : 1.0;
     }
     // After the solve, which refreshes the solids' part of the applied field: a resumed run,
     // which has no solids' field before its first solve, then sees the same largest field.

@@ -17,7 +17,7 @@
 // The must-show needs a pool several times finer (a coat of a few spacings on a 10 mm flank).
 // FERRO_CLIMB_CURRENT sets the
 // current, FERRO_CLIMB_CSV writes the cells (r, z, rho g z, mu0 (F + Mn^2/2), residual),
-// FERRO_CLIMB_DUMP every particle's (r, z, speed) at the end.
+// FERRO_CLIMB_DUMP every particle's (r, z, speed) at the end, FERRO_CLIMB_COUNT the particles.
 #include "sim/core/Constants.hpp"
 #include "sim/core/SceneDocument.hpp"
 #include "sim/magnetics/SolidCoupling.hpp"
@@ -252,8 +252,9 @@ ClimbCheck settledClimb(long count, double current, double& rms, double& spacing
 TEST_CASE("fluid climbing a steel frustum over a cored coil rests on the ferrohydrostatic law", "[magnetics][solids][.climb]") {
     double rms = 0, s = 0;
     const double current = std::getenv("FERRO_CLIMB_CURRENT") ? std::atof(std::getenv("FERRO_CLIMB_CURRENT")) : 0.45;
-    const ClimbCheck c = settledClimb(4000, current, rms, s);
-    WARN("climb, 4,000 particles (" << 1e3 * s << " mm): rise " << c.rise << " Pa over " << c.cells
+    const long count = std::getenv("FERRO_CLIMB_COUNT") ? std::atol(std::getenv("FERRO_CLIMB_COUNT")) : 4000;
+    const ClimbCheck c = settledClimb(count, current, rms, s);
+    WARN("climb, " << count << " particles (" << 1e3 * s << " mm): rise " << c.rise << " Pa over " << c.cells
                                   << " cells, worst deviation from the law " << c.worst << " Pa ("
                                   << 100 * c.worst / c.rise << " %), coat top " << 1e3 * c.coatTop
                                   << " mm over the pool at " << 1e3 * c.pool << " mm, RMS speed " << 1e3 * rms
