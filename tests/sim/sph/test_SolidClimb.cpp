@@ -127,7 +127,7 @@ std::vector<SurfaceSample> surfaceSamples(const FluidSimulation& sim) {
     const std::vector<Vec3>& xf = sim.positions();
     std::vector<Vec3d> x(xf.size());
     for (size_t i = 0; i < x.size(); ++i) x[i] = xf[i].cast<double>();
-    const HashGrid grid(x, 2 * s);
+    const HashGrid grid(x, 3 * s);
     std::vector<SurfaceSample> out;
     for (size_t i = 0; i < x.size(); ++i) {
         // The outward direction: away from the neighbours within two spacings.
@@ -139,9 +139,11 @@ std::vector<SurfaceSample> surfaceSamples(const FluidSimulation& sim) {
         });
         if (!(inward.norm() > 0)) continue;
         const Vec3d n = -inward.normalized();
-        // A surface particle has no neighbour within 1.5 spacings in its outward cone (40 deg).
+        // A surface particle has no neighbour within 3 spacings in its outward cone (40 deg):
+        // with 1.5, particles of a layer under a gap between the pool's layers passed for
+        // surface (FERRO_CLIMB_DUMP's picture at 0.55 mm).
         bool covered = false;
-        grid.forEachWithin(x[i], 1.5 * s, [&](uint32_t j, double d2) {
+        grid.forEachWithin(x[i], 3 * s, [&](uint32_t j, double d2) {
             if (j != i && d2 > 0 && (x[j] - x[i]).dot(n) > std::cos(40 * kPi / 180) * std::sqrt(d2)) covered = true;
         });
         if (covered) continue;
