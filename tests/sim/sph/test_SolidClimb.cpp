@@ -5,16 +5,18 @@
 // M just inside the surface from an evaluation of our own (the magnets' and the solids' field
 // at the surface point, the fluid's own as the particle reports it, M by the Langevin law).
 //
-// NOT YET PASSING, hence hidden (ferro_sph_tests "[.climb]", ~4 CPU minutes): the harness of
-// issue 51's climb must-show, kept for the next step. Measured 2026-12-07 at 4,000 particles
-// (0.8 mm), 0.45 A, with the solids' standoff (a particle reads their field half a spacing
-// off the wall): RMS speed 2.0 mm/s after 1.5 s (7 mm/s before the standoff); the pool's own
-// free surface (12 cells, r 6-12 mm) scatters +-2.9 Pa about the law where rho g z varies by
-// 8 Pa across them, but the 4 mm pool is five particles deep and the flank holds no coat
-// (FERRO_CLIMB_DUMP's picture): a handful of particles sit on the
-// frustum's top (+47 to +65 Pa off the law) and the outward-cone test takes some particles
-// of the pool's middle layer for surface (-18 to -22 Pa), so the worst cell is 55 % off.
-// The must-show needs a pool several times finer (a coat of a few spacings on a 10 mm flank).
+// NOT YET PASSING, hence hidden (ferro_sph_tests "[.climb]"; 4,000 particles ~4 CPU minutes,
+// 13,500 ~11): the harness of issue 51's climb must-show, kept for the next step. Measured
+// 2026-12-07, 0.45 A, with the solids' standoff (a particle reads their field half a spacing
+// off the wall; before it the pool moved at 7 mm/s after 1.5 s):
+//   - 4,000 particles (0.8 mm): the 4 mm pool is five particles deep and holds no coat; a few
+//     particles on the frustum's top, 55 % off the law; 2.0 mm/s.
+//   - 8,000 (0.66 mm): the pool rises 1.35 mm up the flank; 14 surface cells, worst +4.5 Pa
+//     (at the flank) of a 16.8 Pa rise (27 %), the rest within 2.1 Pa (13 %); 0.89 mm/s.
+//   - 13,500 (0.55 mm): a 0.6 mm rise at the flank; 18 cells, worst +1.8 Pa (the contact
+//     line) of 7.0 Pa (26 %), the rest within 1.1 Pa (15 %); 0.51 mm/s.
+// At rest (< 1 mm/s) at both finer spacings; the law within 10 % not yet: the cells at the
+// contact line sit 2-4 Pa above it.
 // FERRO_CLIMB_CURRENT sets the
 // current, FERRO_CLIMB_CSV writes the cells (r, z, rho g z, mu0 (F + Mn^2/2), residual),
 // FERRO_CLIMB_DUMP every particle's (r, z, speed) at the end, FERRO_CLIMB_COUNT the particles.
