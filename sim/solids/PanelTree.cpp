@@ -65,7 +65,8 @@ int32_t PanelTree::buildCell(uint32_t begin, uint32_t end) {
 
 void PanelTree::setCharges(const std::vector<double>& q) {
     for (size_t k = 0; k < order_.size(); ++k) q_[k] = q[order_[k]];
-    // Moments of every cell from its own panels (cells are few; no upward pass needed).
+    // Moments of every cell from its own panels: O(P log P) a solve, beside the solve's own
+    // O(P^2) operator, so no upward pass from the children.
     for (Cell& c : cells_) {
         c.q = 0;
         c.absQ = 0;
@@ -88,8 +89,8 @@ void PanelTree::setCharges(const std::vector<double>& q) {
     }
 }
 
-void PanelTree::evaluate(const Vec3d& x, double openingAngle, double tolerance, Eigen::Vector3d& h, Eigen::Matrix3d& g,
-                         std::vector<uint32_t>& near) const {
+void PanelTree::evaluate(const Vec3d& x, double openingAngle, double tolerance, double minGap, Eigen::Vector3d& h,
+                         Eigen::Matrix3d& g, std::vector<uint32_t>& near) const {
     if (cells_.empty()) return;
     // The sums in scalars: the field and the Jacobian's six independent entries (the Hessian
     // of a potential is symmetric).
@@ -103,7 +104,7 @@ void PanelTree::evaluate(const Vec3d& x, double openingAngle, double tolerance, 
         const double d2 = rx * rx + ry * ry + rz * rz;
         const double d = std::sqrt(d2);
         const double gap = d - c.radius;
-        if (c.radius < openingAngle * d && gap >= c.reach && gap > 0 &&
+        if (c.radius < openingAngle * d && gap >= c.reach && gap > 0 && gap >= minGap &&
             c.absQ * c.radius * c.radius * c.radius <= tolerance * gap * gap * gap * gap * gap) {
             // The cell's multipole: phi = Q/r - D . grad(1/r) + M : grad grad(1/r) / 2,
             // H = -grad phi, J = -grad grad phi (the derivative tensors of 1/r to fourth order):

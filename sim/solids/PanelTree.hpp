@@ -51,8 +51,10 @@ public:
 
     /// Adds to h and g the point-charge field sum q r / |r|^3 and its Jacobian (no 1/(4 pi))
     /// of every panel beyond its reach from x, and appends the others' indices to `near`.
-    void evaluate(const Vec3d& x, double openingAngle, double tolerance, Eigen::Vector3d& h, Eigen::Matrix3d& g,
-                  std::vector<uint32_t>& near) const;
+    /// No cell is expanded whose extent comes within `minGap` [m] of x: a panel whose surface
+    /// is that near is in an opened leaf (listed, unless beyond its pointReach).
+    void evaluate(const Vec3d& x, double openingAngle, double tolerance, double minGap, Eigen::Vector3d& h,
+                  Eigen::Matrix3d& g, std::vector<uint32_t>& near) const;
 
 private:
     struct Cell {

@@ -436,13 +436,13 @@ int SurfaceChargeSolver::solveInterior() const {
 
 Vec3d SurfaceChargeSolver::field(const Vec3d& x) const { return kInv4Pi * densityField(sigma_, x); }
 
-void SurfaceChargeSolver::pointSum(const Vec3d& x, Vec3d& h, Mat3d& g, std::vector<uint32_t>& near) const {
+void SurfaceChargeSolver::pointSum(const Vec3d& x, Vec3d& h, Mat3d& g, std::vector<uint32_t>& near, double keepNear) const {
     const size_t n = centroid_.size();
     if (!tree_.empty()) {
         near.clear();
         h.setZero();
         g.setZero();
-        tree_.evaluate(x, params_.openingAngle, treeTolerance_, h, g, near);
+        tree_.evaluate(x, params_.openingAngle, treeTolerance_, keepNear, h, g, near);
         return;
     }
     // Pass 1, branch-free over every panel (float, centroids about origin_): the point-charge
@@ -531,11 +531,12 @@ void SurfaceChargeSolver::fieldAndGradient(const Vec3d& x, Vec3d& H, Mat3d& J, d
     thread_local std::vector<uint32_t> near;
     Vec3d h;
     Mat3d g;
-    pointSum(x, h, g, near);
+    pointSum(x, h, g, near, standoff);
     if (standoff > 0) {
         // The nearest surface point among the panels that can be within the standoff (each
-        // such panel is a near one: kPointRuleReach radii exceed radius + standoff for any
-        // standoff under 5 radii; a larger one still finds the nearest of these).
+        // such panel is a near one: the tree expands no cell within the standoff, and
+        // kPointRuleReach radii exceed radius + standoff for any standoff under 5 radii; a
+        // larger one still finds the nearest of these).
         double best = standoff;
         Vec3d foot = Vec3d::Zero(), normal = Vec3d::Zero();
         bool inside = false;

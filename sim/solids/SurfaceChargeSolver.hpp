@@ -161,8 +161,9 @@ private:
     // without 1/(4 pi).
     void collocationField(const std::vector<double>& d, std::vector<Vec3d>& out) const;
     // fieldAndGradient at x without a standoff, without 1/(4 pi); the panels within
-    // kPointRuleReach radii of x in `near`.
-    void pointSum(const Vec3d& x, Vec3d& h, Mat3d& g, std::vector<uint32_t>& near) const;
+    // kPointRuleReach radii of x in `near`, and every panel whose surface comes within
+    // `keepNear` [m] of x that is within those radii (the tree expands no cell that near).
+    void pointSum(const Vec3d& x, Vec3d& h, Mat3d& g, std::vector<uint32_t>& near, double keepNear = 0) const;
     // The near panels' exact field added to a far sum.
     void addNearPanels(const Vec3d& x, const std::vector<uint32_t>& near, Vec3d& h, Mat3d& g) const;
     // The field of density d at an arbitrary point, without 1/(4 pi).
