@@ -19,14 +19,12 @@
 // Ferrohydrodynamics, ch. 5) asks rho g z_s = mu0 (F(H) + M_n^2 / 2) + C with H and M the
 // total field and magnetization just inside the surface, M_n the normal component: the
 // magnetic pressure plus the normal traction. So G is fitted to the surface pressure
-// P = F(H) + M_n^2 / 2 of surface samples. Two fits (the simulation uses FreeSurface; Nodes is its fallback with too few samples):
-//  - Fit::Nodes (the default): r piecewise linear in log h on K nodes evenly spaced between
-//    the smallest and largest h of the solve, constant beyond them. Least squares of each
-//    particle's M along the applied field against r(h) M_law(h) and, given samples,
-//    G(h_s) - C = P_s at a tenth of the weight for the particles. The simulation passes the
-//    solve's own surface weights, which at rest are the floor and the walls, not the free
-//    surface: resting pools miss the law by 13 % of the centre rise at chi0 0.5 and 39-44 %
-//    at 1.5, the heap too tall (tests/sim/sph/test_FluidMagnetics.cpp).
+// P = F(H) + M_n^2 / 2 of surface samples. Two fits (the simulation uses FreeSurface; Nodes,
+// without samples, is its fallback when a solve has too few surface samples):
+//  - Fit::Nodes (the class's default): r piecewise linear in log h on K nodes evenly spaced
+//    between the smallest and largest h of the solve, constant beyond them. Least squares of
+//    each particle's M along the applied field against r(h) M_law(h) and, given samples,
+//    G(h_s) - C = P_s at a tenth of the weight for the particles.
 //  - Fit::FreeSurface: samples on the free surface (FluidMagnetics::surfaceSamples), and
 //    r(h) = c0 + c1 l + c2 l^2, l = log(h_c / h_ref), h_c = h clamped to the samples' range
 //    (their 2nd to 98th percentile), least squares of G(h_s) - C = P_s over the samples alone,

@@ -236,7 +236,6 @@ private:
     void refreshNeighbors(bool forceSearch);
     void searchCandidates();
     void updateNeighbors();
-    /// Akinci 2013 surface normals n_i = h V sum_j (rho0 / rho_j) grad W_ij, for tension.
     /// The colour gradient the magnetic surface force needs (when it does), then the
     /// magnetic update of the step.
     void updateMagnetics(bool forceSolve);
