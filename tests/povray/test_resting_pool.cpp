@@ -60,7 +60,7 @@ TopSurface topSurface(const TriangleMesh& mesh, double spacing) {
 
 } // namespace
 
-TEST_CASE("a pool at rest after the pre-roll is a calm mirror and renders the same frame after frame", "[pov][povray][preroll]")
+TEST_CASE("a pool at rest after the pre-roll is a calm mirror and renders the same frame after frame", "[pov][povray][preroll][slow]")
 {
     const fs::path dir = freshDir("resting_pool");
     spit(dir / "pool.toml", test::smallPoolScene(kSceneExtra));

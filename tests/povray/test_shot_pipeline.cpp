@@ -87,7 +87,7 @@ void touchNow(const fs::path& p, const fs::path& root)
 
 } // namespace
 
-TEST_CASE("shot.sh renders a tiny shot, and make re-runs exactly the stale frames and stages", "[pov][pipeline]")
+TEST_CASE("shot.sh renders a tiny shot, and make re-runs exactly the stale frames and stages", "[pov][pipeline][slow]")
 {
     const fs::path dir = freshDir("pipeline");
     spit(dir / "tiny.toml", kTinyScene);

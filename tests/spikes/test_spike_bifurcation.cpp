@@ -99,7 +99,7 @@ double switchTime(const SpikeScene& sc, double a, double b, bool appear)
 } // namespace
 
 TEST_CASE("height_curve = bifurcation: a swept field raises spikes at M_c with a jump, and they persist down to the lower threshold",
-          "[spikes][bifurcation]")
+          "[spikes][bifurcation][slow]")
 {
     const SpikeScene probe = sweepScene(10000, "");
     const MagnetizationParams& law = probe.fluid.law;

@@ -132,7 +132,7 @@ TEST_CASE("fastest growth between the limits: slower and longer with viscosity, 
 }
 
 TEST_CASE("spacing = \"growth\": a flat pool's tips stand at the fastest-growing wavenumber's distance",
-          "[spikes][pool][wavenumber]")
+          "[spikes][pool][wavenumber][slow]")
 {
     const double R = 0.03;
     for (double H0 : {12000.0, 15000.0}) {

@@ -197,7 +197,7 @@ std::string dipole(double z, double moment, const std::string& extra = "") {
 
 } // namespace
 
-TEST_CASE("extremes: magnetization law from chi0 = 0 to 10, saturation 100 A/m to 1 MA/m (issue 15)", "[extremes]") {
+TEST_CASE("extremes: magnetization law from chi0 = 0 to 10, saturation 100 A/m to 1 MA/m (issue 15)", "[extremes][slow]") {
     // A 1 A m^2 dipole 5 mm under the floor (the field at the floor is about 1.3e6 A/m,
     // far beyond saturation for every row).
     const std::string magnet = dipole(-0.005, 1.0);
@@ -230,7 +230,7 @@ TEST_CASE("extremes: applied field from 0 to far beyond saturation, switched off
     for (const Row& row : rows) runRow(row);
 }
 
-TEST_CASE("extremes: magnets touching the dish and inside the fluid (issue 15)", "[extremes]") {
+TEST_CASE("extremes: magnets touching the dish and inside the fluid (issue 15)", "[extremes][slow]") {
     // A magnet inside the fluid used to throw most particles above the rim at 5-15 m/s
     // with exit 0: its field, softened over one spacing only, reached 100 T. Sources are
     // now bounded by the smallest real body that carries them (magnetBodyRadius), and that

@@ -69,7 +69,7 @@ double topZ(const ParticleTable& t, double r0, double r1) {
 
 } // namespace
 
-TEST_CASE("a pre-roll settles the fill before frame 0 with the magnets held at t = 0, cached and reused", "[cli][preroll]") {
+TEST_CASE("a pre-roll settles the fill before frame 0 with the magnets held at t = 0, cached and reused", "[cli][preroll][slow]") {
     TempDir d("preroll");
     const std::string scene = d.write("small.toml", smallPoolScene(kSceneExtra));
     const std::string sim = kSim + " " + scene + " --max-frames 3 ";

@@ -72,7 +72,7 @@ bool insideCone(const Vec3d& p, double margin) {
 
 } // namespace
 
-TEST_CASE("a magnetized cone in a pool: a wall nothing enters, and its field at the fluid", "[solids][sim]") {
+TEST_CASE("a magnetized cone in a pool: a wall nothing enters, and its field at the fluid", "[solids][sim][slow]") {
     TempDir dir("solids_pool");
     const std::string scene = dir.write("cone.toml", pool(kCone));
     const std::string plain = dir.write("plain.toml", pool(""));
@@ -157,7 +157,7 @@ permeability = 0.5
     }
 }
 
-TEST_CASE("a shot with a saturating solid is byte-identical across thread counts and a resume", "[solids][sim]") {
+TEST_CASE("a shot with a saturating solid is byte-identical across thread counts and a resume", "[solids][sim][slow]") {
     // The solids' charge warm-starts within a frame (its GMRES, the interior layer, the
     // saturation's secants) and starts cold at each frame's first solve, which is where a
     // resumed run starts: the same bytes either way.
@@ -179,7 +179,7 @@ TEST_CASE("a shot with a saturating solid is byte-identical across thread counts
 }
 
 TEST_CASE("a pool over a cored coil gains no spin: the axisymmetric scene exerts no torque about its axis",
-          "[solids][sim]") {
+          "[solids][sim][slow]") {
     // Conservation of angular momentum about the axis: coil, soft-iron core and dish are
     // symmetric about it, so no force on the fluid has a net moment there and the pool, at rest
     // at the start, keeps L_z = 0 up to the solve's tolerance. A field carried with each

@@ -705,7 +705,7 @@ TEST_CASE("the induced field is re-solved by the tolerance rule or every K steps
     }
 }
 
-TEST_CASE("particle files carry H, M and the magnets at the frame's time, and resume is exact", "[magnetics][cli]") {
+TEST_CASE("particle files carry H, M and the magnets at the frame's time, and resume is exact", "[magnetics][cli][slow]") {
     // The free-surface curve remembers its last fits (FluidMagnetics::kCurveMemory), so the
     // files carry the curve (magnetization_curve) for the resume.
     const std::string fit = "free_surface";

@@ -268,7 +268,7 @@ double standingWaveOmega(double sigma, double lambda, double depth, double s, do
 // Hydrodynamics, sec. 267). Without tension the SPH layer (0.5 mm spacing, 12 layers, a wave of
 // 32 spacings) keeps Lamb's gravity wave: measured 1.04 of it (64.1 against 61.5 rad/s; at 16
 // spacings 0.90). Bound: 8 %.
-TEST_CASE("a standing gravity wave on a periodic layer has Lamb's frequency", "[sph][periodic]") {
+TEST_CASE("a standing gravity wave on a periodic layer has Lamb's frequency", "[sph][periodic][slow]") {
     const double s = 0.0005, depth = 0.006, g = 9.81, lambda = 32 * s;
     const double k = 2 * M_PI / lambda, theory = std::sqrt(g * k * std::tanh(k * depth));
     const double omega = standingWaveOmega(0.0, lambda, depth, s, theory);
@@ -299,7 +299,7 @@ TEST_CASE("a standing capillary-gravity wave on a periodic layer has Lamb's freq
 // The "csf" model: the tension's stiffness is there. At 0.5 mm spacing, sigma = 0.025 N/m,
 // surface amplitude half a spacing: 0.83 of Lamb at 16 spacings (the tension-free SPH wave
 // is 0.90 of its own there), 0.93 at 32 (Akinci's: 0.58 and 0.84).
-TEST_CASE("csf tension: a standing capillary-gravity wave has Lamb's frequency", "[sph][tension][periodic]") {
+TEST_CASE("csf tension: a standing capillary-gravity wave has Lamb's frequency", "[sph][tension][periodic][slow]") {
     const double s = 0.0005, depth = 0.006, g = 9.81, rho = 1200, sigma = 0.025;
     for (double lambdaSpacings : {16.0, 32.0}) {
         const double lambda = lambdaSpacings * s, k = 2 * M_PI / lambda;
@@ -316,7 +316,7 @@ TEST_CASE("csf tension: a standing capillary-gravity wave has Lamb's frequency",
 // whole surface, sim/sph/forces/CurvatureTension.hpp, that raises the interior pressure and
 // moves nothing): the Laplace part, the slope less the push, within 10 % of 2 / R. Measured
 // 2026-12-07: 266 against 268 /m at 1 mm (R = 7.5 spacings), 253 against 261 at 0.7 mm (11).
-TEST_CASE("csf tension: a droplet's pressure is Laplace's 2 sigma / R", "[sph][tension]") {
+TEST_CASE("csf tension: a droplet's pressure is Laplace's 2 sigma / R", "[sph][tension][slow]") {
     for (double s : {0.001, 0.0007}) {
         const double ambient = CurvatureTension::kAmbientCurvature / s;
         const Droplet weak = relaxDroplet(0.025, 0.007, "csf", 0.4, 1e-4, s),
@@ -335,7 +335,7 @@ TEST_CASE("csf tension: a droplet's pressure is Laplace's 2 sigma / R", "[sph][t
 // (akinci2013: 0.14). With the ambient push at 0.5 / s instead of 0.1 / s its flicker shakes
 // this layer to 0.96 (measured; the first periodic-layer runs with "csf" roughened so below the
 // critical field).
-TEST_CASE("csf tension: a flat periodic layer stays flat", "[sph][tension][periodic]") {
+TEST_CASE("csf tension: a flat periodic layer stays flat", "[sph][tension][periodic][slow]") {
     const double s = 0.0005, L = 0.012;
     SimScene scene;
     scene.path = "flat-layer";

@@ -138,7 +138,7 @@ DecayMeasurement measureShearDecay(double nu, const std::string& solver, FluidPa
 } // namespace
 
 TEST_CASE("a shear mode between free-slip walls decays at the SPH operator's rate, 0.67 nu k^2 on the lattice",
-          "[sph][viscosity]") {
+          "[sph][viscosity][slow]") {
     using Method = FluidParams::ViscosityMethod;
     struct Case {
         double nu;
@@ -331,19 +331,19 @@ void checkTank(const std::string& solver, const std::vector<std::pair<double, st
 
 } // namespace
 
-TEST_CASE("a resting tank stays at rest at nu = 1e-3 and 1e-2 m^2/s (DFSPH)", "[sph][viscosity]") {
+TEST_CASE("a resting tank stays at rest at nu = 1e-3 and 1e-2 m^2/s (DFSPH)", "[sph][viscosity][slow]") {
     checkTank("dfsph", {{1e-3, "auto"}, {1e-3, "explicit"}, {1e-2, "auto"}});
 }
 
-TEST_CASE("a resting tank stays at rest at nu = 0.1 and 1 m^2/s (DFSPH)", "[sph][viscosity]") {
+TEST_CASE("a resting tank stays at rest at nu = 0.1 and 1 m^2/s (DFSPH)", "[sph][viscosity][slow]") {
     checkTank("dfsph", {{1e-1, "auto"}, {1.0, "auto"}});
 }
 
-TEST_CASE("a resting tank stays at rest at nu = 1e-3 and 1e-2 m^2/s (WCSPH)", "[sph][viscosity]") {
+TEST_CASE("a resting tank stays at rest at nu = 1e-3 and 1e-2 m^2/s (WCSPH)", "[sph][viscosity][slow]") {
     checkTank("wcsph", {{1e-3, "auto"}, {1e-2, "auto"}, {1e-2, "explicit"}});
 }
 
-TEST_CASE("a resting tank stays at rest at nu = 0.1 and 1 m^2/s (WCSPH)", "[sph][viscosity]") {
+TEST_CASE("a resting tank stays at rest at nu = 0.1 and 1 m^2/s (WCSPH)", "[sph][viscosity][slow]") {
     checkTank("wcsph", {{1e-1, "auto"}, {1.0, "auto"}});
 }
 

@@ -45,7 +45,7 @@ constexpr int kFrames = 30; // frames 0..kFrames: kFrames frame-to-frame steps
 
 TEST_CASE("a still magnet over a resting pool keeps its spike tips: 98 % matched within 0.1 spacing, no interior "
           "births or deaths",
-          "[tips][pipeline][preroll]") {
+          "[tips][pipeline][preroll][slow]") {
     TempDir d("still_tips");
     const std::string scene = d.write("still.toml", smallPoolScene(kSceneExtra));
     // A copy: ferro-sim rewrites a stale cache, and the source tree stays untouched.
