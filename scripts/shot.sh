@@ -91,6 +91,18 @@ scene="$(cd "$(dirname "$scene")" && pwd)/$(basename "$scene")"
 mkdir -p "$out"
 out="$(cd "$out" && pwd)"
 
+# One writer a shot: a second shot.sh on this folder is refused at once (exit 4) while this
+# one, or the make it started, runs. The lock (flock(1) on OUTDIR/.shot.lock, descriptor 9)
+# is inherited by make and the stages and released by the kernel when the last of them ends,
+# killed or not: a lock file a killed run leaves is taken over. The file names the holder.
+exec 9<>"$out/.shot.lock" || { echo "shot.sh: error: $out: cannot lock" >&2; exit 4; }
+if ! flock -n 9; then
+  holder="$(head -n 1 "$out/.shot.lock" 2>/dev/null || true)"
+  echo "shot.sh: error: $out: in use by ${holder:-another run}; wait for it to end or stop it" >&2
+  exit 4
+fi
+printf 'shot.sh %s (pid %d)\n' "$scene" "$$" > "$out/.shot.lock"
+
 # The shot's frames: ferro-pov validates the scene and writes shot.ini for the whole shot
 # (into a scratch directory: the shot's own files are make's business).
 probe="$(mktemp -d)"

@@ -1,4 +1,5 @@
 #include "sim/app/ShotRunner.hpp"
+#include "sim/core/DirectoryLock.hpp"
 
 #include "sim/app/FrameTable.hpp"
 #include "sim/app/Preroll.hpp"
@@ -97,6 +98,8 @@ void runShot(const SimScene& scene, const RunOptions& opt) {
     std::error_code ec;
     fs::create_directories(opt.outDir, ec);
     if (ec) throw ParticleFileError(opt.outDir + ": cannot create directory: " + ec.message());
+    // One writer a folder, taken before anything in it is read, removed or written.
+    const DirectoryLock lock(opt.outDir, "ferro-sim " + scene.path);
 
     std::vector<int> frames = existingFrames(opt.outDir);
     if (!frames.empty() && !opt.resume && !opt.overwrite)

@@ -12,6 +12,10 @@
 #include <regex>
 #include <vector>
 
+#include <fcntl.h>
+#include <sys/file.h>
+#include <unistd.h>
+
 using namespace ferro;
 using namespace ferro::povtest;
 
@@ -249,6 +253,34 @@ TEST_CASE("shot.sh rejects bad arguments with one line and exit code 2 (a missin
         CHECK(std::count(res.output.begin(), res.output.end(), '\n') == 1);
         CHECK_FALSE(fs::exists(dir / "out" / "particles"));
     }
+}
+
+TEST_CASE("one writer a shot: shot.sh on a folder in use is refused at once with exit 4, and runs once it is free", "[pov][pipeline][lock]")
+{
+    // The lock is flock(1) on OUTDIR/.shot.lock (scripts/shot.sh); here this process holds it,
+    // as a running shot.sh (or the make it started) would.
+    const fs::path dir = freshDir("shot_lock");
+    spit(dir / "tiny.toml", kTinyScene);
+    const fs::path out = dir / "shot";
+    fs::create_directories(out);
+    const std::string shot = "FERRO_BIN='" + pipelineBin() + "' '" + kSource + "/scripts/shot.sh' '" +
+                             (dir / "tiny.toml").string() + "' '" + out.string() + "' --no-run";
+    const int fd = ::open((out / ".shot.lock").c_str(), O_RDWR | O_CREAT | O_CLOEXEC, 0644);
+    REQUIRE(fd >= 0);
+    REQUIRE(::flock(fd, LOCK_EX | LOCK_NB) == 0);
+    const std::string holder = "shot.sh tiny.toml (pid " + std::to_string(getpid()) + ")\n";
+    REQUIRE(::write(fd, holder.data(), holder.size()) == ssize_t(holder.size()));
+    Result res = run(shot);
+    CHECK(res.code == 4);
+    CHECK(res.output == "shot.sh: error: " + out.string() + ": in use by shot.sh tiny.toml (pid " + std::to_string(getpid()) +
+                            "); wait for it to end or stop it\n");
+    CHECK(!fs::exists(out / "Makefile"));
+    ::close(fd); // released: the next run takes the lock over
+    res = run(shot);
+    INFO(res.output);
+    CHECK(res.code == 0);
+    CHECK(fs::exists(out / "Makefile"));
+    fs::remove_all(dir);
 }
 
 TEST_CASE("shot.sh --preset passes the documented settings to the stages, and an unknown preset is exit 2", "[pov][pipeline]")

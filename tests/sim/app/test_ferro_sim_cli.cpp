@@ -1,5 +1,6 @@
 // ferro-sim as users run it: exit codes, one-line errors, particle files, --resume after
 // a kill, never losing frames already written.
+#include "sim/core/DirectoryLock.hpp"
 #include "sim/core/ParticleFile.hpp"
 #include "tests/TestUtil.hpp"
 
@@ -448,4 +449,42 @@ moment = 0.05
     REQUIRE(r.code == 0);
     CHECK(r.output.find("resuming after frame 3") != std::string::npos);
     CHECK(slurp(frame(compact, 5)) == f5);
+}
+
+TEST_CASE("one writer a folder: ferro-sim on an output folder in use is refused at once, a killed holder's lock taken over", "[cli][lock]") {
+    const fs::path dir = freshDir("lock");
+    const std::string scene = example("dish.toml");
+    const std::string sim = kSim + " '" + scene + "' --out '" + dir.string() + "' --max-frames 0 --set shot.preroll=0 -q ";
+    {
+        // A holder in this process: the run is refused before it reads or removes anything,
+        // with exit 4 and one line naming the holder and its pid.
+        const DirectoryLock held(dir.string(), "test holder");
+        const CommandResult res = run(sim + "--overwrite");
+        CHECK(res.code == 4);
+        CHECK(lines(res.output) == 1);
+        CHECK(res.output.find("in use by test holder (pid " + std::to_string(getpid()) + ")") != std::string::npos);
+        CHECK(!fs::exists(frame(dir, 0)));
+    }
+    // A holder killed with SIGKILL leaves its lock file naming it; the next run takes it over.
+    const pid_t child = fork();
+    REQUIRE(child >= 0);
+    if (child == 0) {
+        const DirectoryLock held(dir.string(), "a run about to be killed");
+        ::pause();
+        _exit(0);
+    }
+    // Wait until the child holds the lock (its words are in the file), then kill it.
+    for (int k = 0; k < 500 && DirectoryLock::lastHolder(dir.string()).find("about to be killed") == std::string::npos; ++k)
+        std::this_thread::sleep_for(std::chrono::milliseconds(10));
+    REQUIRE(DirectoryLock::lastHolder(dir.string()).find("about to be killed") != std::string::npos);
+    REQUIRE(run(sim + "--overwrite").code == 4); // still held while the child lives
+    ::kill(child, SIGKILL);
+    int status = 0;
+    ::waitpid(child, &status, 0);
+    const CommandResult res = run(sim + "--overwrite");
+    INFO(res.output);
+    CHECK(res.code == 0);
+    CHECK(fs::exists(frame(dir, 0)));
+    CHECK(DirectoryLock::lastHolder(dir.string()).find("ferro-sim") == 0);
+    fs::remove_all(dir);
 }
