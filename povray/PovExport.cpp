@@ -38,9 +38,7 @@ bool writeTextFile(const std::string& path, const std::string& text, bool onlyIf
     try {
         writeFileAtomically(path, [&](std::ostream& out) { out.write(text.data(), std::streamsize(text.size())); });
     } catch (const AtomicFileError& e) {
-        if (e.step() == AtomicFileError::Step::Rename)
-            throw PovExportError("cannot write " + path + ": " + std::strerror(e.errorNumber()));
-        throw PovExportError("cannot write " + path);
+        throw PovExportError("cannot write " + path + ": " + e.what());
     }
     return true;
 }

@@ -155,6 +155,14 @@ fi
 # is exit 3 (the run failed; sim/core/ExitCodes.hpp), its own line already on stderr.
 run_make() {
   make -C "$out" --no-print-directory "$@" && return 0
+  # A full disk is an I/O failure (4), named by its mount point: the stage's own line says
+  # "No space left on device", but make's and POV-Ray's may not.
+  local avail mount
+  read -r avail mount < <(df -Pk "$out" 2>/dev/null | awk 'NR == 2 { print $4, $6 }') || true
+  if [[ -n "$avail" && "$avail" -lt 1024 ]]; then
+    echo "shot.sh: error: the file system mounted at $mount is full (${avail} kB free); the frames before it are kept: free space and run the same command again" >&2
+    exit 4
+  fi
   echo "shot.sh: error: a stage failed (its line is above); the frames before it are kept: run the same command again to continue" >&2
   exit 3
 }

@@ -5,7 +5,9 @@
 #include <cerrno>
 #include <cstdio>
 #include <cstring>
+#include <filesystem>
 #include <fstream>
+#include <sstream>
 
 #include <unistd.h>
 
@@ -13,8 +15,32 @@ namespace ferro {
 
 namespace {
 
+/// The mount point of the file system that holds `path` (the longest mount point in
+/// /proc/self/mounts that is a whole-component prefix of its absolute path), "" if unknown.
+std::string mountPointOf(const std::string& path) {
+    std::error_code ec;
+    const std::string dir = std::filesystem::weakly_canonical(std::filesystem::absolute(path, ec).parent_path(), ec).string();
+    std::ifstream mounts("/proc/self/mounts");
+    std::string line, best;
+    while (std::getline(mounts, line)) {
+        std::istringstream fields(line);
+        std::string device, point;
+        if (!(fields >> device >> point)) continue;
+        // /proc/self/mounts escapes a space in a path as \040.
+        for (size_t at; (at = point.find("\\040")) != std::string::npos;) point.replace(at, 4, " ");
+        const bool prefix = point == "/" || dir == point || dir.rfind(point + "/", 0) == 0;
+        if (prefix && point.size() > best.size()) best = point;
+    }
+    return best;
+}
+
 std::string describe(AtomicFileError::Step step, const std::string& tempPath, int errorNumber) {
-    const std::string reason = std::strerror(errorNumber);
+    std::string reason = std::strerror(errorNumber);
+    // A full disk names the disk: which file system to free, whatever the path's spelling.
+    if (errorNumber == ENOSPC || errorNumber == EDQUOT) {
+        const std::string mount = mountPointOf(tempPath);
+        if (!mount.empty()) reason += " (the file system mounted at " + mount + " is full)";
+    }
     switch (step) {
     case AtomicFileError::Step::Create: return "cannot create " + tempPath + ": " + reason;
     case AtomicFileError::Step::Write: return "write failed: " + reason;

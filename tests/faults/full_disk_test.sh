@@ -1,0 +1,126 @@
+#!/usr/bin/env bash
+# A full disk (issue 53): a shot whose output folder is on a small file system that fills
+# mid-shot stops with exit 4 and a line naming the disk; no file already written is damaged
+# (every file under its final name is byte for byte the uninterrupted run's, a PNG pixel for
+# pixel); once space is freed, the same command finishes and every output is identical to the
+# uninterrupted run's. Each Ferro stage, writing onto a full disk, exits 4 with a line naming it.
+#
+#   tests/faults/full_disk_test.sh SOURCE_DIR BIN_DIR SCRATCH_DIR
+#
+# Mounts a size-limited tmpfs under SCRATCH_DIR (root only; fails, never skips, without it)
+# and unmounts it at the end.
+set -euo pipefail
+src="$1" bin="$2" scratch="$3"
+fail() { echo "full_disk_test: FAIL: $*" >&2; exit 1; }
+[[ $(id -u) == 0 ]] || fail "needs root to mount a size-limited tmpfs"
+command -v povray > /dev/null || fail "povray is not installed"
+
+rm -rf "$scratch"
+mkdir -p "$scratch/mnt"
+mnt="$scratch/mnt"
+trap 'umount "$mnt" 2> /dev/null || true' EXIT
+cd "$scratch"
+
+# A tiny shot (as tests/povray/test_shot_pipeline.cpp's): 4 frames, every stage.
+cat > tiny.toml << 'EOF'
+[shot]
+fps = 10
+duration = 0.3
+
+[[fluid.block]]
+shape = "cylinder"
+center = [0.0, 0.0, 0.0]
+radius = 0.02
+height = 0.005
+count = 300
+
+[container]
+type = "dish"
+center = [0.0, 0.0, 0.0]
+radius = 0.02
+height = 0.01
+
+[[magnets]]
+position = [0.0, 0.0, -0.1]
+moment = 0.01
+
+[render]
+width = 48
+height = 36
+camera_position = [0.0, -0.07, 0.045]
+EOF
+# Two outputs are the same: byte for byte, except a PNG, whose pixels are compared (POV-Ray
+# stamps each PNG with its render time, a tIME chunk).
+same() {
+  case "$1" in
+    *.png) python3 - "$1" "$2" << 'PY'
+import struct, sys, zlib
+def pixels(path):
+    data, at, head, idat = open(path, 'rb').read(), 8, b'', b''
+    while at < len(data):
+        n, kind = struct.unpack('>I4s', data[at:at + 8])
+        if kind == b'IHDR': head = data[at + 8:at + 8 + n]
+        if kind == b'IDAT': idat += data[at + 8:at + 8 + n]
+        at += 12 + n
+    return head, zlib.decompress(idat)
+sys.exit(0 if pixels(sys.argv[1]) == pixels(sys.argv[2]) else 1)
+PY
+    ;;
+    *) cmp -s "$1" "$2" ;;
+  esac
+}
+shot() { FERRO_BIN="$bin" "$src/scripts/shot.sh" "$scratch/tiny.toml" "$1" --no-video -j2 2> "$2"; }
+# The outputs compared: particles, meshes, includes, the scene files, the frames.
+outputs() { (cd "$1" && find particles surface spiky shot png -type f \( -name '*.ply' -o -name '*.inc' -o -name '*.pov' -o -name '*.ini' -o -name '*.png' \) 2> /dev/null | LC_ALL=C sort); }
+
+shot "$scratch/ref" ref.log || { cat ref.log >&2; fail "the uninterrupted run failed"; }
+refsize=$(du -sk "$scratch/ref" | cut -f1)
+echo "full_disk_test: the uninterrupted shot: $(outputs "$scratch/ref" | wc -l) files, $refsize kB"
+
+# A disk of half the shot's size: it fills mid-shot.
+size=$((refsize / 2))
+mount -t tmpfs -o size=${size}k tmpfs "$mnt"
+code=0
+shot "$mnt/shot" full.log || code=$?
+echo "full_disk_test: on a ${size} kB disk: exit $code; its last line: $(tail -n 1 full.log)"
+[[ $code == 4 ]] || { cat full.log >&2; fail "exit $code on a full disk, expected 4"; }
+tail -n 1 full.log | grep -q "the file system mounted at $mnt is full" || { cat full.log >&2; fail "the last line does not name the disk"; }
+grep -q "No space left on device" full.log || { cat full.log >&2; fail "no stage said 'No space left on device'"; }
+kept=0
+while read -r f; do
+  same "$mnt/shot/$f" "$scratch/ref/$f" || fail "$f on the full disk differs from the uninterrupted run's"
+  kept=$((kept + 1))
+done < <(outputs "$mnt/shot")
+leftovers=$(find "$mnt/shot" -name '*.tmp*' | wc -l)
+echo "full_disk_test: $kept files written before the disk filled, all identical to the uninterrupted run's; $leftovers temporary files left"
+
+# Space freed: the same command finishes, byte-identical.
+mount -o remount,size=$((refsize * 4))k "$mnt"
+shot "$mnt/shot" resumed.log || { cat resumed.log >&2; fail "the re-run after freeing space failed"; }
+diff <(outputs "$mnt/shot") <(outputs "$scratch/ref") > /dev/null || fail "the re-run's file list differs from the uninterrupted run's"
+same=0
+while read -r f; do
+  same "$mnt/shot/$f" "$scratch/ref/$f" || fail "$f after the re-run differs from the uninterrupted run's"
+  same=$((same + 1))
+done < <(outputs "$scratch/ref")
+echo "full_disk_test: after freeing space the same command finished: $same of $same files identical (PNGs pixel for pixel)"
+
+# Each stage onto a full disk: exit 4, one line naming the disk.
+umount "$mnt"
+mount -t tmpfs -o size=64k tmpfs "$mnt"
+head -c 60000 /dev/zero > "$mnt/fill"
+r="$scratch/ref"
+check_stage() {
+  local name="$1"; shift
+  local c=0
+  "$@" > /dev/null 2> stage.log || c=$?
+  [[ $c == 4 ]] || { cat stage.log >&2; fail "$name on a full disk: exit $c, expected 4"; }
+  [[ $(wc -l < stage.log) == 1 ]] || { cat stage.log >&2; fail "$name on a full disk: more than one line"; }
+  grep -q "the file system mounted at $mnt is full" stage.log || { cat stage.log >&2; fail "$name: the line does not name the disk"; }
+  echo "full_disk_test: $name: exit 4: $(cat stage.log)"
+}
+check_stage ferro-sim "$bin/ferro-sim" tiny.toml --out "$mnt/p" --quiet
+check_stage ferro-surface "$bin/ferro-surface" "$r/particles/particles_0002.ply" --scene tiny.toml --out "$mnt/s.ply" --quiet
+check_stage ferro-spikes "$bin/ferro-spikes" "$r/surface/surface_0002.ply" --particles "$r/particles/particles_0002.ply" --scene tiny.toml --out "$mnt/k.ply" --quiet
+check_stage ferro-pov "$bin/ferro-pov" "$r/spiky/spiky_0002.ply" --scene tiny.toml --frame 2 --out "$mnt/shot" --no-shot --quiet
+echo "full_disk_test: passed"
