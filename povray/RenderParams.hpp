@@ -21,8 +21,8 @@ struct RenderParams {
     double antialiasThreshold = 0.3;          ///< +A threshold, > 0 (smaller = more samples)
     int antialiasDepth = 3;                   ///< +R, 1..9: sub-samples per pixel edge
     /// Soft-box lights of look.inc (area lights): an N x N grid of samples, 1..9 (adaptive, no
-    /// jitter). Measured on frame 60 of the demo at 640x480: 2 renders in 0.56 of the time of
-    /// 3 (8.4 vs 15.1 s) for RMSE 0.0096 against 3, the shadows of thin objects faintly stepped.
+    /// jitter). Fewer samples render faster, the shadows of thin objects faintly stepped.
+    /// Measurements: docs/physics/demo-shot.md.
     int lightSamples = 3;
     /// Display size of magnets that have none of their own (point dipoles); bar magnets use
     /// their pole distance as length, loops their radius.

@@ -79,9 +79,9 @@ struct SpikeParams {
     double maxAspect = 1.0;          ///< cap of tip height (3 C0) over tip spacing l, > 0
     double sharpness = 1.0;          ///< profile exponent p >= 1: 1 = eq. 13 exactly; larger p narrows
                                      ///< the spikes into cones over flat troughs (same tips, same spacing).
-                                     ///< 1 is the shape measured near onset (within 10 % of eq. 13 up to
-                                     ///< 1.18-1.4 x the critical field, Gollwitzer et al. 2007); p <= 1.4
-                                     ///< stays within 10 % of it (bench field-sweep, spike_profile.py)
+                                     ///< 1 is the shape measured near onset (Gollwitzer et al. 2007).
+                                     ///< Measurements: docs/physics/spikes.md, "Against the full
+                                     ///< force: the periodic layer"
     // The art director's keys (keyframable with [[spikes.keys]]). They change the look, not
     // where the physics puts the pattern: the defaults leave the paper's spikes untouched.
     double heightGain = 1.0;         ///< factor on every tip's height (after the aspect cap), >= 0,
@@ -116,17 +116,17 @@ struct SpikeParams {
     double lowerThreshold = 0.9;     ///< M_s / M_c of the bifurcation curve, in [0.5, 1]: spikes that
                                      ///< stand collapse below M_s; 1 = no hysteresis (then no jump).
                                      ///< 0.9: where the full-force layer's pattern sank as the
-                                     ///< field was held lower (bench field-sweep: 0.9-0.925 at
-                                     ///< 1 mm, 0.85-0.9 at 0.75 mm; docs/physics/magnetization.md)
+                                     ///< field was held lower (docs/physics/magnetization.md,
+                                     ///< "The field swept up and down (csf)")
     double magnetizationFade = 0.25; ///< height ramps from 0 at |M| = M_c to full at (1 + fade) M_c
     /// Spikes follow the field with this time constant [s], >= 0: a spike's height is the
     /// heights its |M| gave over the past, averaged with weight exp(-(t - t') / growthTime),
     /// the past taken from the scene's magnet tracks (so a frame is still made alone, in any
     /// order). A field that jumps on grows spikes over a few frames instead of popping them in;
     /// one that goes lets them sink; a still field gives the instantaneous pattern. 0 = the
-    /// paper (instantaneous). 0.2 s, not 0.1: on the demo's approach (Fig. 9, 10,240
-    /// particles) the pattern's new outer rings were born up to 1.13 mm tall in one frame (22 %
-    /// of the final tallest tip, 5.1 mm); at 0.2 s no tip jumps more than 0.67 mm (13 %).
+    /// paper (instantaneous). 0.2 s, not 0.1: at 0.1 s the new outer rings of a growing
+    /// pattern are born too tall in one frame. Measurements: docs/physics/spikes.md, the
+    /// opening section (the demo's approach).
     double growthTime = 0.2;
     /// Tips carried by the fluid's flow (SurfaceFlow.hpp) [s], in [0, 5]: each tip moves with
     /// the surface velocity under it and the field pulls it back to its lattice site with this
@@ -146,9 +146,8 @@ struct SpikeParams {
     double wallFade = 0.0;           ///< height ramps in over this distance from the wetted wall [m];
                                      ///< 0 = one tip spacing l. Not l / 2: a ramp narrower than a
                                      ///< spike tilts its peak off the lattice point, and the outer
-                                     ///< tips of a still magnet's pattern (issue 14's test with the
-                                     ///< free_surface fit, 55 tips reaching the wall fade) wandered
-                                     ///< 0.5-0.8 mm per frame with the mesh's wall distance
+                                     ///< tips of a still magnet's pattern wander with the mesh's
+                                     ///< wall distance (docs/physics/spikes.md, the opening section)
     double resolution = 16.0;        ///< target mesh edges per tip spacing in the spiky area, >= 3
     int remeshIterations = 3;        ///< CGAL isotropic remeshing iterations, >= 0 (0 = no refinement)
     double ambientDensity = 1.2;     ///< density of the medium above the fluid (air) [kg/m^3]

@@ -36,9 +36,8 @@ public:
 /// filled with voxels. A compact fluid's estimate is its volume grown by a kernel radius
 /// on every side; an isolated particle's is its kernel's box.
 struct GridEstimate {
-    /// Peak bytes per estimated voxel. Measured (ferro-surface, anisotropic, a 40^3 lattice
-    /// at 1 mm, peak RSS less the 56 MB of a tiny run): 19 B at a 0.25 mm voxel (4.7e6
-    /// voxels), 15.5 B at 0.18 mm (1.3e7), 13.8 B at 0.125 mm (3.8e7, 0.58 GB).
+    /// Peak bytes per estimated voxel [B], a round bound over ferro-surface's measured peak
+    /// (anisotropic method). Measurements: docs/physics/surface.md, last paragraph.
     static constexpr double kBytesPerVoxel = 20;
     double cell = 0;     ///< the cells' edge [m]: the kernel's diameter
     size_t cells = 0;    ///< cells holding a particle

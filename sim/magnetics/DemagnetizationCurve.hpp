@@ -9,9 +9,9 @@
 // the self-consistent M_i of every particle is not a gradient. M_i depends on where the other
 // particles are (the layer's thickness, the heap's shape), not on h alone, so
 // curl f = mu0 grad M x grad h is not zero and the force drives a steady convection roll:
-// over a still dipole a pool never rests (5 mm/s RMS on 2,000 particles against 0.6 mm/s
-// with the `external` solver). With M a function of h only the force is a potential force,
-// which the pressure balances at rest.
+// over a still dipole a pool never rests (docs/physics/magnetization.md, "The body force").
+// With M a function of h only the force is a potential force, which the pressure balances
+// at rest.
 //
 // Which function: in an incompressible fluid a potential force only shifts the pressure
 // inside; what shapes the free surface is G along it. At rest the surface obeys
@@ -31,15 +31,14 @@
 //    C free (at least kMinSurfaceSamples; fewer fall back to the nodes without samples). With
 //    a memory m in [0, 1) the targets are m (G_last(h_s) - C_last) + (1 - m) P_s: the curve
 //    moves towards each solve's surface instead of jumping to it (the simulation sets m from
-//    the time since the last fit, FluidMagnetics::kCurveMemory; with C free and no memory a
-//    pool at chi0 1.5 sloshed at 10.8 mm/s, the samples' particles shuffling). A low-order
-//    curve on purpose: a curve free enough to follow each ring of the surface (16 nodes) let
-//    the traction feed the shape ring by ring and a pool at chi0 1.5 rippled; the fit is
-//    continuous in the samples (a node range that jumped with the samples' extent pumped a
-//    pool at 9 mm/s). r is not clamped at zero: where the surface pressure falls as h rises
-//    (a surface the field runs along), so does G. Resting pools meet the law within
-//    4.4 % (chi0 0.5) and 4.5 % (1.5) of the centre rise at 10,240 particles; at 2,560 the
-//    suite reads 9.5 % (0.5) and 5.6-32 % (1.5, WCSPH-DFSPH) (tests/sim/sph/test_FluidMagnetics.cpp).
+//    the time since the last fit, FluidMagnetics::kCurveMemory: without it the samples'
+//    particles shuffle and the pool sloshes). A low-order curve on purpose: one free enough
+//    to follow each ring of the surface lets the traction feed the shape ring by ring; and
+//    the fit is continuous in the samples (a node range that jumps with the samples' extent
+//    pumps the pool). r is not clamped at zero: where the surface pressure falls as h rises
+//    (a surface the field runs along), so does G. Measurements (the pools' deviation from
+//    the law, and the sloshing and pumping above): docs/physics/magnetization.md, "The
+//    free-surface curve fit", and docs/physics/magnetics.md.
 // Deterministic (sequential sums in the given order).
 #include <optional>
 #include <vector>

@@ -30,16 +30,15 @@
 //   External  M = M(H_ext) alone, O(N); error ~ the neglected particle field (~chi/(1+chi)).
 //   Direct    exact all-pairs products, O(N^2) per field evaluation: the reference.
 //   Tree      Barnes-Hut products (sim/particlefield/DipoleTree.hpp), opening angle theta = cell size /
-//             distance; at the default 0.5 see bench-magnetization for its error and speed
-//             against Direct on a 40,960-particle dish layer.
+//             distance (default 0.5).
 //   Auto      External if its sampled error is under `tolerance`, else Direct up to
 //             directLimit() particles, else Tree (theta tightened, warm-started, up to twice
 //             if the sampled tree error exceeds the tolerance). Stats::solver says which.
-// A typical solve takes ~9 field evaluations cold and ~4 warm-started after a small step
-// (chi0 ~ 1.5); 11-14 for a ball at linear chi0 = 10, settled or 0.2-jittered (tests), plus
-// three for the local correction. The
-// sphere model (smoothing = 0) is indefinite on disordered sets: it stalls at its iteration
-// cap with a ~2e-2 residual at chi0 >= 3 on a jittered ball.
+// The local correction adds three field evaluations a solve. The sphere model
+// (smoothing = 0) is indefinite on disordered sets and may stop at its iteration cap
+// unconverged at large chi0. Measurements (evaluations a solve, the tree's error and speed
+// against Direct): docs/physics/magnetics.md, the opening list, and
+// docs/physics/particle-field.md, "The sphere model (smoothing = 0)".
 //
 // Units: SI throughout (A/m, m, m^3); positions and results float, internals double.
 #include "sim/particlefield/DipoleTree.hpp"

@@ -15,11 +15,9 @@
 // Cost: one charge solve (GMRES, warm-started within a frame; a dense P x P matrix-vector
 // product an application up to 6,144 panels), and the field and Jacobian at every particle,
 // O(P) a particle, at every step (fieldAt): the field the force reads must be the gradient
-// field at where the particle is now. A cache that carried each particle's field from where
-// it was last evaluated by its Jacobian (re-evaluating after a quarter spacing's move) made
-// the force the gradient of a quadratic model that changed at every re-evaluation, and the
-// jumps, one-signed along a direction of motion, pumped a pool over a cored coil into a
-// spin (0.73 m/s after 0.5 s; evaluated every step, 0.002 m/s).
+// field at where the particle is now. A per-particle cache extrapolated by its Jacobian is
+// not: its jumps at each re-evaluation pump the pool (docs/physics/magnetics.md,
+// "Magnetizable solids", coupling with the fluid).
 #include "sim/magnets/MagnetField.hpp"
 #include "sim/magnets/MagnetizationParams.hpp"
 #include "sim/solids/SolidParams.hpp"

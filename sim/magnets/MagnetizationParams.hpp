@@ -24,8 +24,8 @@ struct MagnetizationParams {
     double smoothing = 2.5;
     /// Local consistency correction (sim/particlefield/DipoleTree.hpp): removes the
     /// particle-scale noise of the field operator for three field evaluations a solve. Off:
-    /// settled SPH states are within 1 % without it, and it makes the solve 2-3x dearer
-    /// (docs/physics/magnetization.md has the measurements).
+    /// settled SPH states do not need it, and it makes the solve dearer. Measurements:
+    /// docs/physics/magnetization.md, "local_correction (default off)".
     bool localCorrection = false;
     /// How the magnetic force enters the fluid (sim/sph/FluidMagnetics.hpp): Body (default),
     /// the magnets' field gradient times a magnetization curve fitted to the free surface;

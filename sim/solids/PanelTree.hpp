@@ -18,10 +18,11 @@
 //     absolute charge |q| R^3 / (d - R)^5, is under `tolerance` (an absolute field, the
 //     caller's scale). The last matters: a magnetized body's charges are large and of both
 //     signs, so far cells' fields cancel, and a purely geometric criterion (the opening
-//     angle alone) left errors of 0.3-6 % of the total field beside a cored coil at angles
-//     0.2-0.5. Because a cell carries its panels' spread, it may stand much nearer than a
-//     point charge could (two panel radii against six): the panels between, which the sum
-//     over every panel evaluates by a 3-point rule each, are mostly inside expansions.
+//     angle alone) does not bound the error relative to the total field
+//     (docs/physics/magnetics.md, "Magnetizable solids"). Because a cell carries its
+//     panels' spread, it may stand much nearer than a point charge could (two panel radii
+//     against six): the panels between, which the sum over every panel evaluates by a
+//     3-point rule each, are mostly inside expansions.
 // Units: SI; double precision.
 #include "sim/core/Types.hpp"
 

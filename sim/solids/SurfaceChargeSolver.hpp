@@ -15,10 +15,9 @@
 // vanishes as mu_r -> infinity. A body's total charge is zero (div B = 0), and that mode is
 // exactly its total charge, so each body adds (1/|S_b|) integral_{S_b} sigma dA to its rows:
 // the solution is unchanged and the conductor mode is lifted to ~1, so GMRES converges in
-// about as many steps at mu_r = 1e5 as at 10 (a cone in a coil's field: 12, 14 and 14 steps
-// to 1e-6 at mu_r 10, 1e3 and 1e5; tests/sim/solids). What net charge the discretization
-// still leaves (~1 % of the charge on that cone) is removed as a uniform density, so no
-// monopole outlasts the dipole far away.
+// about as many steps at mu_r = 1e5 as at 10. What net charge the discretization still
+// leaves is removed as a uniform density, so no monopole outlasts the dipole far away.
+// Measurements: docs/physics/magnetics.md, "Magnetizable solids".
 //
 // The field inside a solid is the small difference of H0 and H_s when mu_r is large (H_in =
 // 3 H0 / (mu_r + 2) in a sphere), so it is not evaluated from sigma. Inside, H = -grad psi
@@ -127,17 +126,17 @@ public:
     /// but that is the cancelling part; use interiorField there).
     Vec3d field(const Vec3d& x) const;
     /// The field and its Jacobian at x with the tighter kPoint* reaches, the far panels by
-    /// the tree: the particles' path, as accurate as field() on a sphere (0.2-0.3 %, the
-    /// Jacobian within 0.7 % of the dipole's; tests/sim/solids). Zero before a solve. A
-    /// function of x alone, the same bits on any thread.
+    /// the tree: the particles' path, as accurate as field() (tests/sim/solids; the numbers:
+    /// docs/physics/magnetics.md, "Magnetizable solids"). Zero before a solve. A function of
+    /// x alone, the same bits on any thread.
     ///
     /// `standoff` [m] > 0: a point nearer the solids' surface than that (or inside) takes the
     /// field at the nearest surface point moved `standoff` out (along the direction from it,
     /// or the panel's normal from inside), and
     /// the Jacobian of that map (the tangential part of J there): what a fluid particle, a
-    /// parcel a spacing across, sees at a wall. Without it a particle touching the wall sat
+    /// parcel a spacing across, sees at a wall. Without it a particle touching the wall sits
     /// on the flat panels' edges, where the piecewise-constant charge's field has a
-    /// logarithmic spike: a Morpho Tower preview flung particles off the blade at 1,000 g.
+    /// logarithmic spike (docs/physics/magnetics.md, "Magnetizable solids", at the wall).
     void fieldAndGradient(const Vec3d& x, Vec3d& H, Mat3d& J, double standoff = 0) const;
     /// The total field H [A/m] at x inside a solid (applied plus own), from the interior layer.
     Vec3d interiorField(const Vec3d& x) const;

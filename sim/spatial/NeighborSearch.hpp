@@ -31,9 +31,8 @@ inline void splitCoordinates(const std::vector<Vec3>& x, std::vector<Real>& px, 
     }
 }
 
-/// Dense grid of cells, one search radius wide, over an axis-aligned box. (Cells of half
-/// a radius with a 5 x 5 row stencil cut to the sphere test fewer candidates, but were
-/// slower here: a cell then holds one particle, and the per-row overhead wins.)
+/// Dense grid of cells, one search radius wide, over an axis-aligned box (why not half a
+/// radius: docs/physics/sph-solver.md, "Neighbour search").
 struct GridGeometry {
     static constexpr int kPad = 1;  ///< spare cells on every side (the stencil's reach)
     Vec3 origin{0, 0, 0};
@@ -84,8 +83,8 @@ private:
 /// Appends to `out` the indices j in [begin, end) with |x_j - p|^2 < h2, skipping `self`.
 /// Positions come as separate coordinate arrays so that blocks of 8 candidates are tested
 /// with SIMD into a bit mask and only the hits (about one in seven) are appended; the tail
-/// appends branch-free (write always, advance on a hit). An unpredictable branch per
-/// candidate used to dominate the search.
+/// appends branch-free (write always, advance on a hit): no unpredictable branch per
+/// candidate.
 inline uint32_t gatherRange(const Real* px, const Real* py, const Real* pz, uint32_t begin, uint32_t end,
                             const Vec3& p, Real h2, uint32_t self, uint32_t* out, uint32_t count) {
     const Real x = p.x(), y = p.y(), z = p.z();
@@ -147,8 +146,9 @@ struct NeighborLists {
     std::vector<uint32_t> index;    ///< neighbour indices, neighbour k of particle i at offset[i] + k
     /// s_ij of each pair with grad_i W(x_i - x_j) = s_ij (x_i - x_j), at the positions of the
     /// last updateNeighbors (empty if not stored). One float, not the gradient's three: the
-    /// pressure sweeps stream these lists, and half the bytes is ~1.6x their speed
-    /// (bench-sim's cost line); the offset x_i - x_j is rebuilt from positions in cache.
+    /// pressure sweeps stream these lists, so half the bytes a pair makes them faster; the
+    /// offset x_i - x_j is rebuilt from positions in cache. Measurements:
+    /// docs/physics/sph-solver.md, "Neighbour search".
     std::vector<Real> gradFactor;
 
     uint32_t begin(size_t i) const { return offset[i]; }

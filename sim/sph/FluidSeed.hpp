@@ -12,10 +12,10 @@ namespace ferro {
 
 /// The memory a run will need, estimated from the scene before anything is allocated.
 struct RunSize {
-    /// Bytes per fluid particle: state, neighbour candidate slots and lists with DFSPH's
-    /// stored gradients, solver and magnetics arrays. Measured: 1,000,000 particles, DFSPH,
-    /// no magnets, peak RSS 1.41 GB (tests/sim/app/test_extremes.cpp); 3 kB leaves room for
-    /// the magnetics arrays and the wider neighbour slots of a compressed fluid.
+    /// Bytes per fluid particle [B]: state, neighbour candidate slots and lists with DFSPH's
+    /// stored gradients, solver and magnetics arrays; set above a measured DFSPH run's peak to
+    /// leave room for the magnetics arrays and the wider neighbour slots of a compressed
+    /// fluid. Measurements: docs/physics/sph-solver.md, "Memory estimate".
     static constexpr double kBytesPerFluidParticle = 3000;
     /// Bytes per boundary particle: position, volume, split coordinates, sort.
     static constexpr double kBytesPerBoundaryParticle = 64;

@@ -6,7 +6,8 @@
 // - the exposure in [0, 1]: 1 when no fluid particle stands in the cone of half-angle ~40
 //   degrees along the outward direction -grad c within 1.5 spacings, falling smoothly to 0 as
 //   one enters it (the scan region of Marrone et al. 2010). In a moving, disordered fluid
-//   |grad c| alone reaches 40 % of a flat surface's value deep inside;
+//   |grad c| alone does not tell the surface from the inside (docs/physics/magnetization.md,
+//   "The surface force");
 // - FlatSurface: the scales of a flat cubic lattice surface (the seed's lattice, support 2
 //   spacings) that turn these into a surface weight and spread a traction over the layers.
 // A traction t [Pa] (a pressure on the surface, positive inward) is applied as the

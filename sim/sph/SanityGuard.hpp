@@ -34,8 +34,8 @@ struct SanityLimits {
     /// as if it all went into one particle, yet speeds can legitimately exceed the energy
     /// speed of the sources: a dam break's front runs at 2 sqrt(g H) (Ritter), 1.4x the free
     /// fall speed; a converging splash or a jet focuses the energy of many particles into a
-    /// few. 5x the speed (25x the energy) leaves room for that; the examples reach at most
-    /// 0.4x the bound without the factor (sim/sph/README.md lists them).
+    /// few. 5x the speed (25x the energy) leaves room for that. Measurements:
+    /// docs/physics/sph-solver.md, "The sanity guard's speed bound".
     static constexpr double kSpeedSafety = 5;
     /// Floor of the speed bound [m/s]: a scene at rest (no gravity, no magnets) still has
     /// pressure noise; 0.1 m/s is far above that and far below an explosion.

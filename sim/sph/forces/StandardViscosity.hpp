@@ -12,9 +12,9 @@ namespace ferro {
 class StandardViscosity : public PairForceModel {
 public:
     static constexpr const char* kName = "standard";
-    /// The explicit update's stable step is kExplicitStep h^2 / nu: its fastest rate on a
-    /// resting tank was measured at 58 nu / h^2 (stable below 0.0345 h^2 / nu;
-    /// docs/physics/sph-solver.md, "Viscosity").
+    /// The explicit update's stable step is kExplicitStep h^2 / nu [s] (h the support [m], nu
+    /// the kinematic viscosity [m^2/s]): a margin under the operator's measured stability
+    /// bound. Measurements: docs/physics/sph-solver.md, "Viscosity".
     static constexpr double kExplicitStep = 0.02;
 
     explicit StandardViscosity(const PairForceSetup& s)

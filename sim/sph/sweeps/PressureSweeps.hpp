@@ -3,16 +3,14 @@
 // accelerations of a pressure field, and the density change of a velocity or acceleration
 // field. They are most of a DFSPH step's time (bench-sim's cost line: sweep_ms), so they are
 // compiled twice, for the baseline x86-64 (SSE2) and for x86-64-v3 (AVX2, FMA), and the
-// processor picks one at run time (pressureSweeps()). A generic build then runs them as fast
-// as a -march=native one did (bench-sim's 40,960-particle dam break: sweep 0.77x, DFSPH step
-// 0.81x of the generic build before; README.md).
+// processor picks one at run time (pressureSweeps()): a generic build runs them as fast as a
+// -march=native one. Measurements: docs/physics/sph-solver.md, "The models in brief".
 //
 // Contract: plain arrays only, so that the x86-64-v3 copy shares no inline code with the rest
 // of the program (an inline function compiled for AVX2 in one file could otherwise be the
 // copy the linker keeps for every file). The two copies give the same bits (the x86-64-v3 one
-// is compiled with -ffp-contract=off: no fused multiply-adds), and the same bits as the
-// sweeps before they moved here: a frame does not depend on the processor that made it
-// (tested: tests/sim/sph/test_PressureSweeps.cpp).
+// is compiled with -ffp-contract=off: no fused multiply-adds): a frame does not depend on the
+// processor that made it (tested: tests/sim/sph/test_PressureSweeps.cpp).
 #include <cstddef>
 #include <cstdint>
 
