@@ -16,10 +16,20 @@
 //   - 13,500 (0.55 mm): a 0.6 mm rise at the flank; 18 cells, worst +1.8 Pa (the contact
 //     line) of 7.0 Pa (26 %), the rest within 1.1 Pa (15 %); 0.51 mm/s.
 // At rest (< 1 mm/s) at both finer spacings; the law within 10 % not yet: the cells at the
-// contact line sit 2-4 Pa above it.
-// FERRO_CLIMB_CURRENT sets the
-// current, FERRO_CLIMB_CSV writes the cells (r, z, rho g z, mu0 (F + Mn^2/2), residual),
-// FERRO_CLIMB_DUMP every particle's (r, z, speed) at the end, FERRO_CLIMB_COUNT the particles.
+// contact line sit 2-4 Pa above it. What it is not (8,000 particles, 2026-12-07 session 4):
+//   - the normal traction alone: at the contact-line cells mu0 Mn^2/2 is 0.08-0.26 Pa (the
+//     field along the steel's normal lies along the fluid's surface there), against 3.0-3.3
+//     Pa at r = 6.2-6.5 mm where |H| is alike; a potential body force mu0 M_f(|H|) grad |H|
+//     cannot give both, but `force = "surface"`, which applies mu0 (F + Mn^2/2) itself, is
+//     worse: +6.5 Pa at the flank (35 % of 18.4 Pa) and not at rest (4.6 mm/s);
+//   - capillarity alone: with no tension the fluid creeps up onto the frustum's top (10.6 mm)
+//     and the pool's own cells spread over 6.8 Pa (48 %).
+// Suspects left: the field the law reads half a spacing out where the particles read it at
+// a standoff from the steel, and the akinci2013 tension at a wall (docs/physics/sph-solver.md).
+// Environment: FERRO_CLIMB_CURRENT [A], FERRO_CLIMB_COUNT (particles), FERRO_CLIMB_CHI
+// (susceptibility), FERRO_CLIMB_FORCE (magnetization.force), FERRO_CLIMB_TENSION [N/m];
+// FERRO_CLIMB_CSV writes the cells (r, z, rho g z, mu0 (F + Mn^2/2), residual, mu0 Mn^2/2),
+// FERRO_CLIMB_DUMP every particle's (r, z, speed) at the end.
 #include "sim/core/Constants.hpp"
 #include "sim/core/SceneDocument.hpp"
 #include "sim/magnetics/SolidCoupling.hpp"
@@ -49,6 +59,12 @@ namespace {
 // its floor over a soft-iron core in a coil of 500 turns under the floor, the current ramped
 // to I over 0.4 s and held.
 std::string climbScene(long count, double current) {
+    const char* chiEnv = std::getenv("FERRO_CLIMB_CHI");
+    const std::string chi = chiEnv ? chiEnv : "1.5";
+    const char* forceEnv = std::getenv("FERRO_CLIMB_FORCE");
+    const std::string force = forceEnv ? forceEnv : "body";
+    const char* tensionEnv = std::getenv("FERRO_CLIMB_TENSION");
+    const std::string tension = tensionEnv ? tensionEnv : "0.025";
     return R"([shot]
 fps = 10
 duration = 3.0
@@ -56,7 +72,7 @@ preroll = 0.0
 [fluid]
 rest_density = 1200.0
 viscosity = 5e-6
-surface_tension = 0.025
+surface_tension = )" + tension + R"(
 [[fluid.block]]
 shape = "cylinder"
 center = [0.0, 0.0, 0.0]
@@ -83,8 +99,9 @@ current = 0.0
 time = 0.4
 current = )" + std::to_string(current) + R"(
 [magnetization]
-susceptibility = 1.5
+susceptibility = )" + chi + R"(
 saturation = 35000.0
+force = ")" + force + R"("
 [[solids]]
 shape = "cone"
 radius = 0.006
@@ -118,6 +135,7 @@ double frustumDistance(double r, double z) {
 // sides of the law there [Pa].
 struct SurfaceSample {
     double r, z, gravity, magnetic;
+    double normalShare; ///< mu0 Mn^2 / 2 of `magnetic` [Pa]
 };
 
 std::vector<SurfaceSample> surfaceSamples(const FluidSimulation& sim) {
@@ -165,7 +183,7 @@ std::vector<SurfaceSample> surfaceSamples(const FluidSimulation& sim) {
         const double h = H.norm();
         const double mn = h > 0 ? langevinMagnetization(h, chi0, Ms) * H.dot(n) / h : 0.0;
         out.push_back({std::hypot(xs.x(), xs.y()), xs.z(), rho0 * g * xs.z(),
-                       kMu0 * (langevinEnergy(h, chi0, Ms) + 0.5 * mn * mn)});
+                       kMu0 * (langevinEnergy(h, chi0, Ms) + 0.5 * mn * mn), kMu0 * 0.5 * mn * mn});
     }
     return out;
 }
@@ -185,17 +203,18 @@ ClimbCheck climbCheck(const std::vector<std::vector<SurfaceSample>>& looks, doub
     for (const auto& look : looks)
         for (const SurfaceSample& p : look) cells[{int(p.r / s), int(p.z / s)}].push_back(&p);
     struct Cell {
-        double r, z, gravity, magnetic;
+        double r, z, gravity, magnetic, normalShare;
     };
     std::vector<Cell> kept;
     for (const auto& [key, samples] : cells) {
         if (samples.size() < looks.size()) continue;
-        Cell c{0, 0, 0, 0};
+        Cell c{0, 0, 0, 0, 0};
         for (const SurfaceSample* p : samples) {
             c.r += p->r / samples.size();
             c.z += p->z / samples.size();
             c.gravity += p->gravity / samples.size();
             c.magnetic += p->magnetic / samples.size();
+            c.normalShare += p->normalShare / samples.size();
         }
         kept.push_back(c);
     }
@@ -215,10 +234,10 @@ ClimbCheck climbCheck(const std::vector<std::vector<SurfaceSample>>& looks, doub
     out.pool /= std::max(poolCells, 1.0);
     if (csv) {
         std::ofstream f(csv);
-        f << "# r [mm], z [mm], rho g z [Pa], mu0 (F + Mn^2/2) [Pa], residual - mean [Pa]\n";
+        f << "# r [mm], z [mm], rho g z [Pa], mu0 (F + Mn^2/2) [Pa], residual - mean [Pa], mu0 Mn^2/2 [Pa]\n";
         for (const Cell& c : kept)
             f << 1e3 * c.r << ' ' << 1e3 * c.z << ' ' << c.gravity << ' ' << c.magnetic << ' '
-              << c.gravity - c.magnetic - mean << '\n';
+              << c.gravity - c.magnetic - mean << ' ' << c.normalShare << '\n';
     }
     return out;
 }
