@@ -53,7 +53,7 @@ EOF
 # stamps each PNG with its render time, a tIME chunk).
 same() {
   case "$1" in
-    *.png) python3 "$src/tests/faults/png_pixels.py" "$1" "$2" ;;
+    *.png) python3 "$src/tests/tools/pngcheck.py" same "$1" "$2" 2> /dev/null ;;
     *) cmp -s "$1" "$2" ;;
   esac
 }

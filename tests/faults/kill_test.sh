@@ -82,7 +82,7 @@ run_shot() { FERRO_BIN="$wrap" POVRAY="$wrap/povray" "$src/scripts/shot.sh" "$sc
 outputs() { (cd "$1" && find particles surface spiky shot png -type f \( -name '*.ply' -o -name '*.inc' -o -name '*.pov' -o -name '*.ini' -o -name '*.png' \) 2> /dev/null | LC_ALL=C sort); }
 same() {
   case "$1" in
-    *.png) python3 "$src/tests/faults/png_pixels.py" "$1" "$2" ;;
+    *.png) python3 "$src/tests/tools/pngcheck.py" same "$1" "$2" 2> /dev/null ;;
     *) cmp -s "$1" "$2" ;;
   esac
 }
