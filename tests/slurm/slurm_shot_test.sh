@@ -9,7 +9,10 @@
 #   2. a second submission runs only the cancelled frame (the simulation is up to date);
 #   3. the frames equal a local `make` run: meshes and includes bit for bit, particle files
 #      bit for bit but for the header line naming the scene (frame-unchanged.sh), PNG pixels
-#      (POV-Ray stamps its PNGs with the render date).
+#      (POV-Ray stamps its PNGs with the render date);
+#   4. (issue 53) a second shot: a running frame task killed with SIGKILL, the node taken
+#      down (scontrol update State=DOWN) and up again while the simulation runs, then the
+#      same shot resubmitted until complete: its frames equal the local run too.
 # Usage: slurm_shot_test.sh SOURCE_DIR BIN_DIR SCRATCH_DIR. Fails (never skips) when Slurm
 # is not installed: scripts/install-deps.sh --with-slurm installs it, and CI runs this.
 set -euo pipefail
@@ -128,4 +131,71 @@ for f in $(seq 0 10); do
   python3 "$src/tests/tools/pngcheck.py" same "$scratch/local/png/frame_$tag.png" "$out/png/frame_$tag.png" \
     || fail "frame $f: PNG pixels differ"
 done
-echo "PASS: Slurm shot: requeued simulation resumed after frame $resumed, cancelled frame 2 filled in alone, 11 frames equal the local run"
+
+# ---- 4. a running frame task killed, the node taken down and up, then resubmitted ---------------
+# A second shot of the same scene: one frame task killed with SIGKILL while it runs; then,
+# with the simulation running, the node goes down (its jobs die as on a node failure: the
+# simulation, submitted with --requeue, is requeued) and comes back. Resubmitting the same
+# shot fills in what failed; every frame then equals the local run.
+out2="$scratch/slurm2"
+res="$("$src/scripts/shot.sh" "$scratch/shot.toml" "$out2" --frames 0:10 --slurm --max-parallel 2 2> "$scratch/submit4.err")" \
+  || { cat "$scratch/submit4.err"; fail "fourth submission"; }
+sim="$(field sim "$res")" frames="$(field frames "$res")"
+# The node goes down once frame 3 is published and the simulation still runs, and comes back.
+for _ in $(seq 600); do
+  [[ -f "$out2/particles/particles_0003.ply" ]] && break
+  sleep 0.1
+done
+[[ -f "$out2/particles/particles_0003.ply" ]] || fail "node down: frame 3 was never published"
+[[ ! -f "$out2/particles/particles_0030.ply" ]] || fail "the simulation ended before the node went down (make the scene longer)"
+scontrol update NodeName=localhost State=DOWN Reason=ferro-test
+# Its jobs end (the simulation requeued); the node takes RESUME once they have left it.
+for _ in $(seq 300); do
+  scontrol update NodeName=localhost State=RESUME 2> /dev/null && break
+  sleep 0.2
+done
+sinfo -h -o %T | grep -qv down || fail "node down: the node did not come back"
+# Then the first frame task seen running is killed with SIGKILL.
+killed_task=""
+for _ in $(seq 1200); do
+  if [[ "$(squeue -h -j "$sim" -o %r 2> /dev/null)" == BeginTime ]]; then scontrol update JobId="$sim" StartTime=now; fi
+  killed_task="$(squeue -h -j "$frames" -t RUNNING -o %i 2> /dev/null | head -n 1)"
+  [[ -n "$killed_task" || -z "$(squeue -h -o %i)" ]] && break
+  sleep 0.1
+done
+[[ -n "$killed_task" ]] && scancel --signal=KILL --full "$killed_task"
+for _ in $(seq 1200); do
+  if [[ "$(squeue -h -j "$sim" -o %r 2> /dev/null)" == BeginTime ]]; then scontrol update JobId="$sim" StartTime=now; fi
+  [[ -z "$(squeue -h -o %i)" ]] && break
+  sleep 0.5
+done
+wait_jobs
+down_restarts="$(grep -c "restart" "$out2/logs/slurm/sim.out" || true)"
+for attempt in 1 2 3; do
+  res="$("$src/scripts/shot.sh" "$scratch/shot.toml" "$out2" --frames 0:10 --slurm 2> "$scratch/submit5.err")" \
+    || { cat "$scratch/submit5.err"; fail "resubmission after the node came back"; }
+  [[ "$res" == "sim= frames= video= tasks=" ]] && break
+  echo "after the node came back, resubmitted: $res"
+  for _ in $(seq 300); do
+    if [[ -n "$(field sim "$res")" && "$(squeue -h -j "$(field sim "$res")" -o %r 2> /dev/null)" == BeginTime ]]; then
+      scontrol update JobId="$(field sim "$res")" StartTime=now
+    fi
+    [[ -z "$(squeue -h -o %i)" ]] && break
+    sleep 0.5
+  done
+  wait_jobs
+done
+[[ "$res" == "sim= frames= video= tasks=" ]] || fail "the shot is not complete after three resubmissions: $res"
+for f in $(seq 0 10); do
+  tag="$(printf %04d "$f")"
+  "$src/scripts/frame-unchanged.sh" "$scratch/local/particles/particles_$tag.ply" "$out2/particles/particles_$tag.ply" \
+    || fail "node down: frame $f: particles differ from the local run"
+  for file in surface/surface_$tag.ply spiky/spiky_$tag.ply shot/mesh_$tag.inc shot/magnets_$tag.inc; do
+    cmp -s "$scratch/local/$file" "$out2/$file" || fail "node down: $file differs from the local run"
+  done
+  python3 "$src/tests/tools/pngcheck.py" same "$scratch/local/png/frame_$tag.png" "$out2/png/frame_$tag.png" \
+    || fail "node down: frame $f: PNG pixels differ"
+done
+[[ -n "$killed_task" ]] || fail "node down: no frame task ran after the node came back"
+echo "Slurm faults: frame task $killed_task killed while running, node down and up with the simulation running (its log: $down_restarts restart lines), resubmitted until complete ($attempt submissions): 11 frames equal the local run"
+echo "PASS: Slurm shot: requeued simulation resumed after frame $resumed, cancelled frame 2 filled in alone, 11 frames equal the local run; a killed frame task and a node down and up survived"
