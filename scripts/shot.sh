@@ -101,7 +101,8 @@ if ! flock -n 9; then
   echo "shot.sh: error: $out: in use by ${holder:-another run}; wait for it to end or stop it" >&2
   exit 4
 fi
-printf 'shot.sh %s (pid %d)\n' "$scene" "$$" > "$out/.shot.lock"
+# (The holder's words are a courtesy: on a full disk they may not fit, and the lock holds.)
+{ printf 'shot.sh %s (pid %d)\n' "$scene" "$$" > "$out/.shot.lock"; } 2> /dev/null || true
 
 # The shot's frames: ferro-pov validates the scene and writes shot.ini for the whole shot
 # (into a scratch directory: the shot's own files are make's business).
@@ -131,7 +132,17 @@ fi
 "$bin/ferro-surface" --scene "$scene" --print-scene-inputs "${sets[@]}" > /dev/null
 if [[ $spikes == 1 ]]; then "$bin/ferro-spikes" --scene "$scene" --print-scene-inputs "${sets[@]}" > /dev/null; fi
 
-cat > "$out/Makefile.tmp" <<MAKEFILE
+# A full disk (exit 4) names the file system: the stages' lines say "No space left on
+# device", but make's, POV-Ray's and this script's own writes may not.
+disk_full_exit() {
+  local avail mount
+  read -r avail mount < <(df -Pk "$out" 2>/dev/null | awk 'NR == 2 { print $4, $6 }') || true
+  if [[ -n "$avail" && "$avail" -lt 1024 ]]; then
+    echo "shot.sh: error: the file system mounted at $mount is full (${avail} kB free); the frames before it are kept: free space and run the same command again" >&2
+    exit 4
+  fi
+}
+if ! { cat > "$out/Makefile.tmp"; } 2> /dev/null <<MAKEFILE
 # Written by scripts/shot.sh for this shot; targets and variables: $root/scripts/shot.mk
 SCENE := $scene
 FERRO_BIN := $bin
@@ -142,6 +153,12 @@ MAX_FRAMES := ${max_frames:+$last}
 SETS := ${sets[*]}
 include $root/scripts/shot.mk
 MAKEFILE
+then
+  rm -f "$out/Makefile.tmp"
+  disk_full_exit
+  echo "shot.sh: error: $out/Makefile: cannot write" >&2
+  exit 4
+fi
 mv -f "$out/Makefile.tmp" "$out/Makefile"
 
 if [[ $run == 0 ]]; then
@@ -155,14 +172,7 @@ fi
 # is exit 3 (the run failed; sim/core/ExitCodes.hpp), its own line already on stderr.
 run_make() {
   make -C "$out" --no-print-directory "$@" && return 0
-  # A full disk is an I/O failure (4), named by its mount point: the stage's own line says
-  # "No space left on device", but make's and POV-Ray's may not.
-  local avail mount
-  read -r avail mount < <(df -Pk "$out" 2>/dev/null | awk 'NR == 2 { print $4, $6 }') || true
-  if [[ -n "$avail" && "$avail" -lt 1024 ]]; then
-    echo "shot.sh: error: the file system mounted at $mount is full (${avail} kB free); the frames before it are kept: free space and run the same command again" >&2
-    exit 4
-  fi
+  disk_full_exit
   echo "shot.sh: error: a stage failed (its line is above); the frames before it are kept: run the same command again to continue" >&2
   exit 3
 }

@@ -82,6 +82,16 @@ done < <(outputs "$mnt/shot")
 leftovers=$(find "$mnt/shot" -name '*.tmp*' | wc -l)
 echo "full_disk_test: $kept files written before the disk filled, all identical to the uninterrupted run's; $leftovers temporary files left"
 
+# The same command on the disk still full: exit 4 again, the files kept.
+code=0
+shot "$mnt/shot" again.log || code=$?
+[[ $code == 4 ]] && tail -n 1 again.log | grep -q "the file system mounted at $mnt is full" \
+  || { cat again.log >&2; fail "a re-run on the still-full disk: exit $code"; }
+while read -r f; do
+  same "$mnt/shot/$f" "$scratch/ref/$f" || fail "$f differs after a re-run on the still-full disk"
+done < <(outputs "$mnt/shot")
+echo "full_disk_test: the same command on the still-full disk: exit 4 again, the files kept"
+
 # Space freed: the same command finishes, byte-identical.
 mount -o remount,size=$((refsize * 4))k "$mnt"
 shot "$mnt/shot" resumed.log || { cat resumed.log >&2; fail "the re-run after freeing space failed"; }
