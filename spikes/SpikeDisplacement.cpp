@@ -7,22 +7,6 @@
 
 namespace ferro {
 
-Dominance patternDominance(const std::vector<Pattern>& patterns, const std::vector<Magnet>& magnets, const Vec3d& x)
-{
-    Dominance d;
-    d.dominance.resize(patterns.size());
-    std::vector<char> counted(magnets.size(), 0);
-    for (size_t p = 0; p < patterns.size(); ++p) {
-        const size_t m = size_t(patterns[p].info.magnet);
-        d.dominance[p] = fieldDominance(magnetField(magnets[m], x));
-        // One magnet's patterns (SpikePattern::region) lie apart and do not compete: the
-        // magnet counts once in the sum, and each of them has its whole share.
-        if (!counted[m]) d.sum += d.dominance[p];
-        counted[m] = 1;
-    }
-    return d;
-}
-
 namespace {
 
 // One pattern's tips around a point: the partition-of-unity sums of eq. 13's profile (s, over

@@ -10,28 +10,6 @@
 
 namespace ferro {
 
-/// Unnormalized weight of a pattern whose magnet makes field H [A/m] here: |H|^6. Patterns blend
-/// only where their magnets' fields are within ~30 % of each other (a dipole's |H| ~ r^-3 makes
-/// that a band a few millimetres wide); elsewhere one pattern is in sole charge, so a spike is
-/// not skewed by a faint copy of the other lattice. The band is smooth: no cracks.
-inline double fieldDominance(const Vec3d& H)
-{
-    const double h2 = H.squaredNorm();
-    return h2 * h2 * h2;
-}
-
-/// Each pattern's fieldDominance at a point (from its own magnet's field) and their sum over
-/// the magnets (a magnet with several patterns, SpikePattern::region, counted once).
-struct Dominance {
-    std::vector<double> dominance; ///< per pattern
-    double sum = 0;
-    /// The pattern's share of the blend (equal shares where no magnet has a field).
-    double share(size_t p) const { return sum > 0 ? dominance[p] / sum : 1.0 / double(dominance.size()); }
-};
-
-/// The patterns' field dominance at x [m]; Pattern::info.magnet indexes `magnets`.
-Dominance patternDominance(const std::vector<Pattern>& patterns, const std::vector<Magnet>& magnets, const Vec3d& x);
-
 /// The wetted wall on the refined surface: never displaced, and heights fade in away from it.
 struct WettedWall {
     std::vector<char> wetted; ///< per vertex of the refined mesh: 1 = wetted wall

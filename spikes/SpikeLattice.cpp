@@ -1,7 +1,6 @@
 // Tracing the hexagonal lattice of SpikeLattice.hpp.
 #include "spikes/SpikeLattice.hpp"
 #include "spikes/SurfaceFlow.hpp"
-#include "spikes/SpikeDisplacement.hpp"
 
 #include "sim/core/Constants.hpp"
 
@@ -597,6 +596,22 @@ void settleSeams(std::vector<Pattern>& patterns, const std::vector<Magnet>& magn
         }
         patterns[p].grid = std::make_unique<HashGrid>(positions, patterns[p].info.spacing);
     }
+}
+
+Dominance patternDominance(const std::vector<Pattern>& patterns, const std::vector<Magnet>& magnets, const Vec3d& x)
+{
+    Dominance d;
+    d.dominance.resize(patterns.size());
+    std::vector<char> counted(magnets.size(), 0);
+    for (size_t p = 0; p < patterns.size(); ++p) {
+        const size_t m = size_t(patterns[p].info.magnet);
+        d.dominance[p] = fieldDominance(magnetField(magnets[m], x));
+        // One magnet's patterns (SpikePattern::region) lie apart and do not compete: the
+        // magnet counts once in the sum, and each of them has its whole share.
+        if (!counted[m]) d.sum += d.dominance[p];
+        counted[m] = 1;
+    }
+    return d;
 }
 
 } // namespace ferro

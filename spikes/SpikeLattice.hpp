@@ -3,7 +3,7 @@
 // the free surface the tips are dropped onto, one pattern's tips, and the tracing that lays
 // them out from the pattern's origin. Phase 3 of addSpikes. Internal to ferro_spikes.
 #include "sim/spatial/HashGrid.hpp"
-#include "spikes/SpikeMapper.hpp"
+#include "spikes/SpikeTypes.hpp"
 #include "spikes/SurfaceFields.hpp"
 #include "spikes/SurfaceGeometry.hpp"
 
@@ -89,5 +89,29 @@ void traceLattice(Pattern& pat, const FreeSurface& surface, const SurfaceFields&
 /// positions and the field enter, so merges move smoothly with the magnets. With one pattern
 /// nothing changes (ownership 1).
 void settleSeams(std::vector<Pattern>& patterns, const std::vector<Magnet>& magnets);
+
+// ---- Which pattern owns a point: the blend of several patterns by field dominance ----------
+
+/// Unnormalized weight of a pattern whose magnet makes field H [A/m] here: |H|^6. Patterns blend
+/// only where their magnets' fields are within ~30 % of each other (a dipole's |H| ~ r^-3 makes
+/// that a band a few millimetres wide); elsewhere one pattern is in sole charge, so a spike is
+/// not skewed by a faint copy of the other lattice. The band is smooth: no cracks.
+inline double fieldDominance(const Vec3d& H)
+{
+    const double h2 = H.squaredNorm();
+    return h2 * h2 * h2;
+}
+
+/// Each pattern's fieldDominance at a point (from its own magnet's field) and their sum over
+/// the magnets (a magnet with several patterns, SpikePattern::region, counted once).
+struct Dominance {
+    std::vector<double> dominance; ///< per pattern
+    double sum = 0;
+    /// The pattern's share of the blend (equal shares where no magnet has a field).
+    double share(size_t p) const { return sum > 0 ? dominance[p] / sum : 1.0 / double(dominance.size()); }
+};
+
+/// The patterns' field dominance at x [m]; Pattern::info.magnet indexes `magnets`.
+Dominance patternDominance(const std::vector<Pattern>& patterns, const std::vector<Magnet>& magnets, const Vec3d& x);
 
 } // namespace ferro

@@ -3,7 +3,7 @@
 // (the film test of SurfaceFields::wetted) and the field their magnetization adds to the
 // magnets' and the fluid's (SurfaceFields::field). Internal to ferro_spikes (SpikeFrames.cpp).
 #include "sim/solids/SolidParams.hpp"
-#include "spikes/SpikeMapper.hpp"
+#include "spikes/SpikeTypes.hpp"
 
 #include <string>
 #include <vector>

@@ -3,7 +3,7 @@
 // the fades from the critical magnetization, the wetted wall, and the direction a spike grows.
 // Internal to ferro_spikes (SpikeMapper.cpp and the phase files beside it).
 #include "sim/spatial/HashGrid.hpp"
-#include "spikes/SpikeMapper.hpp"
+#include "spikes/SpikeTypes.hpp"
 
 #include <algorithm>
 #include <memory>
