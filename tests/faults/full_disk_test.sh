@@ -21,45 +21,10 @@ mnt="$scratch/mnt"
 trap 'umount "$mnt" 2> /dev/null || true' EXIT
 cd "$scratch"
 
-# A tiny shot (as tests/povray/test_shot_pipeline.cpp's): 4 frames, every stage.
-cat > tiny.toml << 'EOF'
-[shot]
-fps = 10
-duration = 0.3
-
-[[fluid.block]]
-shape = "cylinder"
-center = [0.0, 0.0, 0.0]
-radius = 0.02
-height = 0.005
-count = 300
-
-[container]
-type = "dish"
-center = [0.0, 0.0, 0.0]
-radius = 0.02
-height = 0.01
-
-[[magnets]]
-position = [0.0, 0.0, -0.1]
-moment = 0.01
-
-[render]
-width = 48
-height = 36
-camera_position = [0.0, -0.07, 0.045]
-EOF
-# Two outputs are the same: byte for byte, except a PNG, whose pixels are compared (POV-Ray
-# stamps each PNG with its render time, a tIME chunk).
-same() {
-  case "$1" in
-    *.png) python3 "$src/tests/tools/pngcheck.py" same "$1" "$2" 2> /dev/null ;;
-    *) cmp -s "$1" "$2" ;;
-  esac
-}
+# A tiny shot: 4 frames, every stage.
+cp "$src/tests/data/tiny_shot.toml" tiny.toml
+source "$src/tests/faults/common.sh"
 shot() { FERRO_BIN="$bin" "$src/scripts/shot.sh" "$scratch/tiny.toml" "$1" --no-video -j2 2> "$2"; }
-# The outputs compared: particles, meshes, includes, the scene files, the frames.
-outputs() { (cd "$1" && find particles surface spiky shot png -type f \( -name '*.ply' -o -name '*.inc' -o -name '*.pov' -o -name '*.ini' -o -name '*.png' \) 2> /dev/null | LC_ALL=C sort); }
 
 shot "$scratch/ref" ref.log || { cat ref.log >&2; fail "the uninterrupted run failed"; }
 refsize=$(du -sk "$scratch/ref" | cut -f1)

@@ -23,33 +23,10 @@ echo "kill_test: $rounds rounds, seed $seed (replay: $0 SOURCE BIN SCRATCH $roun
 rm -rf "$scratch"
 mkdir -p "$scratch"
 cd "$scratch"
-cat > tiny.toml << 'EOF'
-[shot]
-fps = 10
-duration = 0.3
-
-[[fluid.block]]
-shape = "cylinder"
-center = [0.0, 0.0, 0.0]
-radius = 0.02
-height = 0.005
-count = 1500
-
-[container]
-type = "dish"
-center = [0.0, 0.0, 0.0]
-radius = 0.02
-height = 0.01
-
-[[magnets]]
-position = [0.0, 0.0, -0.015]
-moment = 0.4
-
-[render]
-width = 48
-height = 36
-camera_position = [0.0, -0.07, 0.045]
-EOF
+# The tiny shot of the other fault tests with more fluid and a stronger, nearer magnet.
+cp "$src/tests/data/tiny_shot.toml" tiny.toml
+shot_sets=(--set fluid.block.0.count=1500 --set "magnets.0.position=[0.0,0.0,-0.015]" --set magnets.0.moment=0.4)
+source "$src/tests/faults/common.sh"
 # The stages and POV-Ray run through wrappers (FERRO_BIN and make's POVRAY point at them): a
 # wrapper execs the real program under its own pid, and when the round's plan names its kind
 # and its turn (the n-th of that kind to start in the run), it first arms a timer that kills
@@ -77,16 +54,7 @@ exec "$real" "\$@"
 WRAPPER
   chmod +x "$wrap/$k"
 done
-run_shot() { FERRO_BIN="$wrap" POVRAY="$wrap/povray" "$src/scripts/shot.sh" "$scratch/tiny.toml" "$1" --no-video -j2; }
-# The reference is made in its own folder; the watcher compares against it by relative name.
-outputs() { (cd "$1" && find particles surface spiky shot png -type f \( -name '*.ply' -o -name '*.inc' -o -name '*.pov' -o -name '*.ini' -o -name '*.png' \) 2> /dev/null | LC_ALL=C sort); }
-same() {
-  case "$1" in
-    *.png) python3 "$src/tests/tools/pngcheck.py" same "$1" "$2" 2> /dev/null ;;
-    *) cmp -s "$1" "$2" ;;
-  esac
-}
-
+run_shot() { FERRO_BIN="$wrap" POVRAY="$wrap/povray" "$src/scripts/shot.sh" "$scratch/tiny.toml" "$1" --no-video -j2 "${shot_sets[@]}"; }
 run_shot "$scratch/ref" 2> ref.log || { cat ref.log >&2; fail "the uninterrupted run failed"; }
 echo "kill_test: the uninterrupted shot: $(outputs "$scratch/ref" | wc -l) files"
 
