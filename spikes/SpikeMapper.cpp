@@ -1,12 +1,14 @@
 // The spike synthesis of SpikeMapper.hpp: addSpikes and its phases. Phase 3 (the lattice of
 // tips) is in SpikeLattice.cpp, phase 4 (the refinement) in SpikeRefinement.cpp, phase 5 (the
-// displacement) in SpikeDisplacement.cpp; the per-point fields in SurfaceFields.cpp.
+// displacement) in SpikeDisplacement.cpp, the velocities in SpikeVelocity.cpp; the per-point
+// fields in SurfaceFields.cpp.
 #include "spikes/SpikeMapper.hpp"
 #include "sim/core/Constants.hpp"
 
 #include "spikes/SpikeDisplacement.hpp"
 #include "spikes/SpikeLattice.hpp"
 #include "spikes/SpikeRefinement.hpp"
+#include "spikes/SpikeVelocity.hpp"
 #include "spikes/SurfaceFields.hpp"
 #include "spikes/SurfaceGeometry.hpp"
 
@@ -15,8 +17,6 @@
 #include <algorithm>
 #include <cmath>
 #include <limits>
-#include <map>
-#include <tuple>
 
 namespace ferro {
 
@@ -448,111 +448,16 @@ Displaced displaceAndConserve(const SurfaceFields& fields, const std::vector<Pat
     return {std::move(wall), std::move(weight)};
 }
 
-// How a tip moved over the interval before the frame: its drift along the surface [m/s] and the
-// relative rate its amplitude grows at [1/s].
-struct TipMotion {
-    Vec3d drift = Vec3d::Zero();
-    double growth = 0;
-};
-
-// Each tip of `patterns` found again in the lattice `earlier` gives, `interval` seconds before,
-// on the same surface, by its magnet and lattice coordinates (i, j); a tip not there earlier
-// grew from nothing over the interval. Without `earlier` (a field still over the spikes' whole
-// past) every tip stands still.
-std::vector<std::vector<TipMotion>> tipMotions(const std::vector<Pattern>& patterns, const SpikeInput* earlier,
-                                               const SpikeParams& P, double Mc, double interval)
+// `surface` displaced as the earlier input's spikes displaced it (their patterns `before`
+// and fields, unrefined): what the spikes that have gone since stood as.
+TriangleMesh earlierSpikySurface(const TriangleMesh& surface, const SurfaceFields& fields, const SpikeInput& earlier,
+                                 const std::vector<Pattern>& before, const SpikeParams& P, double volumeIn)
 {
-    std::vector<std::vector<TipMotion>> motion(patterns.size());
-    for (size_t p = 0; p < patterns.size(); ++p) motion[p].resize(patterns[p].tips.size());
-    if (!earlier) return motion;
-    const SurfaceFields fields(*earlier, P, Mc);
-    InputRegion region;
-    const std::vector<Pattern> before = tracePatterns(*earlier, P, fields, Mc, region);
-    std::map<std::tuple<int, int, int>, const Tip*> then;
-    for (const Pattern& pat : before)
-        for (const Tip& tip : pat.tips) then[{pat.info.noiseKey(), tip.i, tip.j}] = &tip;
-    for (size_t p = 0; p < patterns.size(); ++p)
-        for (size_t t = 0; t < patterns[p].tips.size(); ++t) {
-            const Tip& tip = patterns[p].tips[t];
-            TipMotion& m = motion[p][t];
-            const auto it = then.find({patterns[p].info.noiseKey(), tip.i, tip.j});
-            if (it != then.end()) {
-                m.drift = (tip.position - it->second->position) / interval;
-                if (tip.amplitude > 0) m.growth = (tip.amplitude - it->second->amplitude) / (interval * tip.amplitude);
-            } else if (tip.amplitude > 0) {
-                m.growth = 1.0 / interval;
-            }
-        }
-    return motion;
-}
-
-// The spiky surface's velocity [m/s] at each vertex of `now` (the refined surface displaced by
-// `patterns` with `weight`, the displacement's weight per vertex: 0 off the spikes, 1 on them).
-// The fluid's surface carries the spikes up and down, but along the surface they stand where
-// the field lays them out: on a spike the surface's velocity along the surface (refined
-// normals) gives way to the spike's own drift. The drift and the growth come from the nearby
-// tips, blended as the displacement blends them ((1 - d^2 / l^2)^3 times ownership, radius l);
-// the displacement scales with the tips' amplitude. So a pattern that slides with its magnet
-// slides, instead of rising and sinking in place as the displacement at a fixed surface point
-// would.
-std::vector<Vec3> spikyVelocities(const TriangleMesh& now, const RefinedSurface& refined,
-                                  const std::vector<Vec3>& surfaceVelocity, const std::vector<double>& weight,
-                                  const std::vector<Pattern>& patterns,
-                                  const std::vector<std::vector<TipMotion>>& motion)
-{
-    std::vector<Vec3> v(now.vertices.size());
-    tbb::parallel_for(size_t(0), v.size(), [&](size_t k) {
-        const Vec3d x = toD(refined.mesh.vertices[k]);
-        const Vec3d n = refined.normals[k];
-        Vec3d vs = toD(surfaceVelocity[k]);
-        vs -= weight[k] * (vs - vs.dot(n) * n);   // along the surface: the spikes' own drift instead
-        double W = 0, growth = 0;
-        Vec3d drift = Vec3d::Zero();
-        for (size_t p = 0; p < patterns.size(); ++p) {
-            const double l = patterns[p].info.spacing;
-            patterns[p].grid->forEachWithin(x, l, [&](uint32_t t, double d2) {
-                const double q = 1.0 - d2 / (l * l);
-                const double w = patterns[p].tips[t].ownership * q * q * q;
-                W += w;
-                drift += w * motion[p][t].drift;
-                growth += w * motion[p][t].growth;
-            });
-        }
-        if (W > 0) vs += weight[k] * drift / W + growth / W * (toD(now.vertices[k]) - x);
-        v[k] = vs.cast<Real>();
-    });
-    return v;
-}
-
-// The input surface's vertex velocities at `points` (on or next to the input surface): each
-// point takes its nearest input vertex's. Empty when the surface has none.
-std::vector<Vec3> surfaceVelocityAt(const TriangleMesh& surface, const std::vector<Vec3>& points)
-{
-    if (surface.velocities.size() != surface.vertices.size() || surface.vertices.empty()) return {};
-    const double edge = meanEdgeLength(surface);
-    std::vector<Vec3d> vertices(surface.vertices.size());
-    for (size_t i = 0; i < vertices.size(); ++i) vertices[i] = toD(surface.vertices[i]);
-    const HashGrid grid(vertices, edge > 0 ? std::max(2 * edge, 1e-9) : 1e-3);
-    std::vector<Vec3> out(points.size());
-    tbb::parallel_for(size_t(0), points.size(),
-                      [&](size_t i) { out[i] = surface.velocities[grid.nearest(toD(points[i]))]; });
-    return out;
-}
-
-// Added to `velocity` (per vertex of `surface`): the velocity of spikes that have gone, the
-// displacement `earlier` gave the surface undone over `interval` (they sink where they stood).
-void addSinkingVelocity(std::vector<Vec3>& velocity, const TriangleMesh& surface, const SpikeInput& earlier,
-                        const SpikeParams& P, double Mc, double volumeIn, double interval)
-{
-    const SurfaceFields fields(earlier, P, Mc);
-    InputRegion region;
-    const std::vector<Pattern> before = tracePatterns(earlier, P, fields, Mc, region);
-    if (before.empty()) return;
     RefinedSurface unrefined{surface, areaWeightedNormals(surface), std::numeric_limits<double>::infinity(), false};
     for (const Pattern& p : before) unrefined.minSpacing = std::min(unrefined.minSpacing, p.info.spacing);
     TriangleMesh then = surface;
     displaceAndConserve(fields, before, earlier, P, unrefined, volumeIn, then);
-    for (size_t i = 0; i < velocity.size(); ++i) velocity[i] += (surface.vertices[i] - then.vertices[i]) / Real(interval);
+    return then;
 }
 
 } // namespace
@@ -586,8 +491,14 @@ SpikeResult addSpikes(const SpikeInput& in, const SpikeParams& params, const Spi
     if (patterns.empty()) {
         // No spikes now; spikes that were there a moment ago sink where they stood.
         res = unchangedResult(std::move(res), in.surface);
-        if (before && !res.mesh.velocities.empty())
-            addSinkingVelocity(res.mesh.velocities, in.surface, *before, Pthen, Mc, res.volumeIn, interval);
+        if (before && !res.mesh.velocities.empty()) {
+            const SurfaceFields fieldsThen(*before, Pthen, Mc);
+            InputRegion regionThen;
+            const std::vector<Pattern> then = tracePatterns(*before, Pthen, fieldsThen, Mc, regionThen);
+            if (!then.empty())
+                addSinkingVelocity(res.mesh.velocities, in.surface,
+                                   earlierSpikySurface(in.surface, fieldsThen, *before, then, Pthen, res.volumeIn), interval);
+        }
         return res;
     }
 
@@ -599,9 +510,16 @@ SpikeResult addSpikes(const SpikeInput& in, const SpikeParams& params, const Spi
     const Displaced displaced = displaceAndConserve(fields, patterns, in, P, refined, res.volumeIn, res.mesh);
     res.volumeOut = enclosedVolume(res.mesh);
     const std::vector<Vec3> surfaceVelocity = surfaceVelocityAt(in.surface, refined.mesh.vertices);
-    if (!surfaceVelocity.empty())
+    if (!surfaceVelocity.empty()) {
+        std::vector<Pattern> then;
+        if (before) {
+            const SurfaceFields fieldsThen(*before, Pthen, Mc);
+            InputRegion regionThen;
+            then = tracePatterns(*before, Pthen, fieldsThen, Mc, regionThen);
+        }
         res.mesh.velocities = spikyVelocities(res.mesh, refined, surfaceVelocity, displaced.weight, patterns,
-                                              tipMotions(patterns, before, Pthen, Mc, interval));
+                                              tipMotions(patterns, before ? &then : nullptr, interval));
+    }
     computeVertexNormals(res.mesh);
     res.refined = std::move(refined.mesh);
 
