@@ -6,7 +6,8 @@
 // Gaussian smoothing -> openvdb::tools::volumeToMesh at the iso level -> triangles with
 // area-weighted vertex normals. The OpenVdb method replaces the first two steps by
 // openvdb::tools::ParticlesToLevelSet (spheres of one spacing radius).
-// OpenVDB stays inside SurfaceExtractor.cpp.
+// OpenVDB stays inside SurfaceExtractor.cpp, KernelRasterizer.cpp and LevelSetFile.cpp
+// (their shared header OpenVdbSurface.hpp is private to them).
 #include "surface/SurfaceParams.hpp"
 #include "sim/core/TriangleMesh.hpp"
 
