@@ -249,12 +249,19 @@ void runShot(const SimScene& scene, const RunOptions& opt) {
                 std::snprintf(buf, sizeof buf, "  visc it %d (res %.1e)", st.viscosityIterations, st.viscosityResidual);
                 mag += buf;
             }
+            // The pressure solves' mean iterations over the frame's steps, and how the density
+            // solve iterated (sim.pressure_iteration): the steps that ran conjugate gradients,
+            // when any did; otherwise Jacobi alone.
+            const SolverCapCount& fc = sim.frameSolverCaps();
+            const double perStep = 1.0 / double(std::max<size_t>(fc.steps, 1));
+            std::string how;
+            if (fc.densityByCg > 0) how = " (cg " + std::to_string(fc.densityByCg) + "/" + std::to_string(fc.steps) + ")";
             std::fprintf(stderr,
-                         "frame %4d/%d  t %.4f s  %5zu steps  %6.1f steps/s  dt %.2e s  iter p %d d %d  "
+                         "frame %4d/%d  t %.4f s  %5zu steps  %6.1f steps/s  dt %.2e s  iter p %.1f%s d %.1f  "
                          "rho err %.3f%%%s  ETA %s\n",
                          frame, lastFrame, sim.time(), steps, steps / std::max(frameSec, 1e-9), st.dt,
-                         st.pressureIterations, st.divergenceIterations, 100 * st.densityError, mag.c_str(),
-                         formatSeconds(eta).c_str());
+                         double(fc.pressureIterations) * perStep, how.c_str(), double(fc.divergenceIterations) * perStep,
+                         100 * st.densityError, mag.c_str(), formatSeconds(eta).c_str());
         }
     }
     if (!opt.quiet) {

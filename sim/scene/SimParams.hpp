@@ -67,14 +67,16 @@ struct SolverParams {
     double maxDensityError = 0.0002;
     double maxDivergenceError = 0.001;///< DFSPH: mean relative density change per step left by the divergence solve (0.1 %)
     int maxIterations = 100;          ///< DFSPH: iteration cap of each solve
-    /// DFSPH: how the density solve iterates (`sim.pressure_iteration`). Jacobi (default):
-    /// SPlisHSPlasH's relaxed Jacobi, warm-started from 0.8 of the last pressure where the
-    /// step compresses. CG: conjugate gradients on the same system (it is symmetric), then
-    /// Jacobi sweeps to the tolerance; its sweeps do not grow with the square of the fluid's
-    /// depth as Jacobi's do. Experimental: for settled pools, not for splashing flows.
-    /// Measurements: docs/physics/sph-solver.md, "Conjugate gradients for the density solve".
-    enum class PressureIteration { Jacobi, ConjugateGradient };
-    PressureIteration pressureIteration = PressureIteration::Jacobi;
+    /// DFSPH: how the density solve iterates (`sim.pressure_iteration`). Auto (default): each
+    /// step starts with relaxed Jacobi and hands over to conjugate gradients when Jacobi's own
+    /// progress says it would not reach the tolerance in a few sweeps (deep layers: Jacobi's
+    /// sweeps grow with the square of the depth in particles, CG's with the depth). Jacobi:
+    /// SPlisHSPlasH's relaxed Jacobi only, warm-started from 0.8 of the last pressure where the
+    /// step compresses. CG: conjugate gradients from the start on the same (symmetric) system,
+    /// then Jacobi sweeps to the tolerance. Measurements: docs/physics/sph-solver.md,
+    /// "Choosing the density iteration".
+    enum class PressureIteration { Auto, Jacobi, ConjugateGradient };
+    PressureIteration pressureIteration = PressureIteration::Auto;
     /// Artificial viscosity alpha, dimensionless: adds alpha * h * U to the kinematic
     /// viscosity (h the kernel support, U the flow speed scale of the scene). SPH at
     /// millimetre spacing cannot resolve the tiny physical viscosity of water or oil; this

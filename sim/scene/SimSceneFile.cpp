@@ -154,9 +154,12 @@ SolverParams parseSolver(const SceneDocument& doc)
     p.maxDensityError = r.positive("max_density_error", p.maxDensityError);
     p.maxDivergenceError = r.positive("max_divergence_error", p.maxDivergenceError);
     p.maxIterations = r.integerInRange("max_iterations", p.maxIterations, 1, INT_MAX);
-    p.pressureIteration = r.choice("pressure_iteration", {"jacobi", "cg"}, "jacobi") == "cg"
-                              ? SolverParams::PressureIteration::ConjugateGradient
-                              : SolverParams::PressureIteration::Jacobi;
+    {
+        const std::string it = r.choice("pressure_iteration", {"auto", "jacobi", "cg"}, "auto");
+        p.pressureIteration = it == "cg"       ? SolverParams::PressureIteration::ConjugateGradient
+                              : it == "jacobi" ? SolverParams::PressureIteration::Jacobi
+                                               : SolverParams::PressureIteration::Auto;
+    }
     p.artificialViscosity = r.numberInRange("artificial_viscosity", p.artificialViscosity, 0, 1);
     p.viscosityTolerance = r.number("viscosity_tolerance", p.viscosityTolerance);
     if (!(p.viscosityTolerance > 0 && p.viscosityTolerance < 1))

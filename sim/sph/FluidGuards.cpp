@@ -125,6 +125,9 @@ void FluidSimulation::checkSanity() {
 
 void SolverCapCount::add(const StepStats& s) {
     ++steps;
+    densityByCg += s.densityByCg;
+    pressureIterations += size_t(std::max(s.pressureIterations, 0));
+    divergenceIterations += size_t(std::max(s.divergenceIterations, 0));
     if (s.densityAtCap) {
         ++densityAtCap;
         densityError = std::max(densityError, s.densityError);

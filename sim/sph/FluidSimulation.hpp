@@ -50,6 +50,7 @@ struct StepStats {
     double viscosityResidual = 0;///< implicit viscosity: relative residual the solve ended at
     double divergenceError = 0;  ///< DFSPH: mean relative compression per step the divergence solve left
     bool densityAtCap = false;   ///< the density solve stopped at sim.max_iterations above its tolerance
+    bool densityByCg = false;    ///< DFSPH: the density solve ran conjugate gradients (sim.pressure_iteration)
     bool divergenceAtCap = false;///< the divergence solve stopped at sim.max_iterations above its tolerance
 };
 
@@ -62,6 +63,9 @@ struct SolverCapCount {
     size_t divergenceAtCap = 0;   ///< steps whose divergence solve ended at the cap
     double densityError = 0;      ///< largest mean relative compression a capped density solve left
     double divergenceError = 0;   ///< largest mean relative compression per step a capped divergence solve left
+    size_t densityByCg = 0;       ///< steps whose density solve ran conjugate gradients
+    size_t pressureIterations = 0;   ///< density solve iterations, summed over the steps
+    size_t divergenceIterations = 0; ///< divergence solve iterations, summed over the steps
     void add(const StepStats& s);
     size_t atCap() const { return std::max(densityAtCap, divergenceAtCap); }
 };

@@ -39,7 +39,7 @@ using namespace ferro;
 
 namespace {
 
-SimScene damBreak40k(const std::string& kind, double surfaceTension, const std::string& iteration = "jacobi",
+SimScene damBreak40k(const std::string& kind, double surfaceTension, const std::string& iteration = "auto",
                      double densityError = 0, int widen = 1) {
     SimScene s;
     s.path = "bench dam break";
@@ -55,8 +55,9 @@ SimScene damBreak40k(const std::string& kind, double surfaceTension, const std::
     s.container.min = Vec3d(0, 0, 0);
     s.container.max = Vec3d(0.32 * widen, 0.08 * widen, 0.2);
     s.solver.pressureSolver = kind;
-    s.solver.pressureIteration = iteration == "cg" ? SolverParams::PressureIteration::ConjugateGradient
-                                                   : SolverParams::PressureIteration::Jacobi;
+    s.solver.pressureIteration = iteration == "cg"       ? SolverParams::PressureIteration::ConjugateGradient
+                                 : iteration == "jacobi" ? SolverParams::PressureIteration::Jacobi
+                                                         : SolverParams::PressureIteration::Auto;
     if (densityError > 0) s.solver.maxDensityError = densityError;
     return s;
 }
@@ -137,11 +138,11 @@ int main(int argc, char** argv) {
     int threads = 2;
     double seconds = 0.1, warmup = 0.05;
     double sample = 0.005;
-    std::string solver = "all", tension = "all", iteration = "jacobi";
+    std::string solver = "all", tension = "all", iteration = "auto";
     double densityError = 0;
     int widen = 1;
     const char* usage = "usage: bench-sim [--threads N] [--seconds S] [--warmup S] [--solver all|wcsph|dfsph] "
-                        "[--tension all|off|akinci] [--sample S] [--pressure-iteration jacobi|cg] [--density-error E] "
+                        "[--tension all|off|akinci] [--sample S] [--pressure-iteration auto|jacobi|cg] [--density-error E] "
                         "[--widen K]\n";
     if (argc % 2 == 0) {
         std::fputs(usage, stderr);
@@ -164,10 +165,10 @@ int main(int argc, char** argv) {
     }
     if (threads < 1 || !(seconds > 0) || !(warmup >= 0) || !(sample > 0) ||
         (solver != "all" && !isPressureSolver(solver)) ||
-        (tension != "all" && tension != "off" && tension != "akinci") || (iteration != "jacobi" && iteration != "cg") ||
+        (tension != "all" && tension != "off" && tension != "akinci") || (iteration != "auto" && iteration != "jacobi" && iteration != "cg") ||
         !(densityError >= 0) || widen < 1 || widen > 8) {
         std::fprintf(stderr, "bench-sim: error: --threads >= 1, --seconds > 0, --warmup >= 0, --sample > 0, --solver all or a "
-                             "registered solver (wcsph, dfsph), --tension all, off or akinci, --pressure-iteration jacobi or cg, "
+                             "registered solver (wcsph, dfsph), --tension all, off or akinci, --pressure-iteration auto, jacobi or cg, "
                              "--density-error >= 0, --widen 1 to 8\n");
         return 2;
     }
