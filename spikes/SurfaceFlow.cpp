@@ -156,7 +156,7 @@ Vec3d SurfaceFlowHistory::carriedOffset(const Vec3d& site, const Vec3d& n, int m
         const std::vector<Magnet>& then = samples_[k].magnets;
         const std::vector<Magnet>& now = latest.magnets;
         if (magnet < 0 || size_t(magnet) >= then.size() || size_t(magnet) >= now.size() ||
-            now[size_t(magnet)].kind == MagnetKind::Uniform)
+            !magnetKindInfo(now[size_t(magnet)].kind).positioned) // a field the same everywhere
             return site;
         // The pattern hangs on the magnet's foot, where its axis meets the surface: a move
         // along the axis (a magnet pulled straight down) leaves it where it is.

@@ -63,10 +63,10 @@ FluidSimulation::FluidSimulation(const SimScene& scene)
             if (!(periodic_.period[a] > least))
                 throw SceneError(scene_.path + ": container.periodic_sides: the box must be wider than " +
                                  std::to_string(least) + " m (2 supports + skin + 4 spacings) in x and y");
-        // Only a field that repeats with the box is periodic: a dipole, bar or loop would jump
-        // at the glued faces (and its body would be cut by them).
+        // Only a field that repeats with the box is periodic: one with a position (a dipole,
+        // bar, loop or coil) would jump at the glued faces (and its body would be cut by them).
         for (size_t m = 0; m < scene_.magnets.size(); ++m)
-            if (scene_.magnets[m].base.kind != MagnetKind::Uniform)
+            if (magnetKindInfo(scene_.magnets[m].base.kind).positioned)
                 throw SceneError(scene_.path + ": container.periodic_sides: magnets[" + std::to_string(m) + "] is a " +
                                  magnetKindInfo(scene_.magnets[m].base.kind).name +
                                  "; periodic sides take uniform fields only (a source's field does not repeat with the box)");

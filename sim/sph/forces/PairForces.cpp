@@ -40,7 +40,7 @@ public:
     double viscousStepLimit() const override { return viscosity_.timeStepLimit(); }
     double tensionStepLimit() const override { return tension_.timeStepLimit(); }
     void setViscosityInSweep(bool inSweep) override { viscosityInSweep_ = inSweep; }
-    bool viscosityHasImplicitSolve() const override { return std::is_same<Viscosity, StandardViscosity>::value; }
+    bool viscosityHasImplicitSolve() const override { return Viscosity::kHasImplicitSolve; }
 
 private:
     template <class V, class T>

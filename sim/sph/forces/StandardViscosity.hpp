@@ -12,6 +12,10 @@ namespace ferro {
 class StandardViscosity : public PairForceModel {
 public:
     static constexpr const char* kName = "standard";
+    /// The implicit solve (sim/sph/ImplicitViscosity) discretizes this model's operator, so
+    /// fluid.viscosity_method implicit or auto may take it out of the sweep. A viscosity model
+    /// must say whether it has one: one that does not stays explicit whatever the method.
+    static constexpr bool kHasImplicitSolve = true;
     /// The explicit update's stable step is kExplicitStep h^2 / nu [s] (h the support [m], nu
     /// the kinematic viscosity [m^2/s]): a margin under the operator's measured stability
     /// bound. Measurements: docs/physics/sph-solver.md, "Viscosity".
