@@ -67,16 +67,17 @@ struct SolverParams {
     double maxDensityError = 0.0002;
     double maxDivergenceError = 0.001;///< DFSPH: mean relative density change per step left by the divergence solve (0.1 %)
     int maxIterations = 100;          ///< DFSPH: iteration cap of each solve
-    /// DFSPH: how the density solve iterates (`sim.pressure_iteration`). Auto (default): each
-    /// step starts with relaxed Jacobi and hands over to conjugate gradients when Jacobi's own
-    /// progress says it would not reach the tolerance in a few sweeps (deep layers: Jacobi's
-    /// sweeps grow with the square of the depth in particles, CG's with the depth). Jacobi:
-    /// SPlisHSPlasH's relaxed Jacobi only, warm-started from 0.8 of the last pressure where the
-    /// step compresses. CG: conjugate gradients from the start on the same (symmetric) system,
-    /// then Jacobi sweeps to the tolerance. Measurements: docs/physics/sph-solver.md,
-    /// "Choosing the density iteration".
-    enum class PressureIteration { Auto, Jacobi, ConjugateGradient };
-    PressureIteration pressureIteration = PressureIteration::Auto;
+    /// DFSPH: how the density solve iterates (`sim.pressure_iteration`). Jacobi (default):
+    /// SPlisHSPlasH's relaxed Jacobi, warm-started from 0.8 of the last pressure where the step
+    /// compresses. Auto: each step starts with Jacobi and hands over to conjugate gradients when
+    /// Jacobi's own rate of progress says it would not reach the tolerance within
+    /// sim.max_iterations (deep layers: Jacobi's sweeps grow with the square of the depth in
+    /// particles, CG's with the depth); not the default, because the steps CG solves leave a
+    /// pool over a magnet less at rest. CG: conjugate gradients from the start on the same
+    /// (symmetric) system, then Jacobi sweeps to the tolerance. Measurements:
+    /// docs/physics/sph-solver.md, "Choosing the density iteration".
+    enum class PressureIteration { Jacobi, Auto, ConjugateGradient };
+    PressureIteration pressureIteration = PressureIteration::Jacobi;
     /// Artificial viscosity alpha, dimensionless: adds alpha * h * U to the kinematic
     /// viscosity (h the kernel support, U the flow speed scale of the scene). SPH at
     /// millimetre spacing cannot resolve the tiny physical viscosity of water or oil; this

@@ -155,10 +155,10 @@ SolverParams parseSolver(const SceneDocument& doc)
     p.maxDivergenceError = r.positive("max_divergence_error", p.maxDivergenceError);
     p.maxIterations = r.integerInRange("max_iterations", p.maxIterations, 1, INT_MAX);
     {
-        const std::string it = r.choice("pressure_iteration", {"auto", "jacobi", "cg"}, "auto");
-        p.pressureIteration = it == "cg"       ? SolverParams::PressureIteration::ConjugateGradient
-                              : it == "jacobi" ? SolverParams::PressureIteration::Jacobi
-                                               : SolverParams::PressureIteration::Auto;
+        const std::string it = r.choice("pressure_iteration", {"jacobi", "auto", "cg"}, "jacobi");
+        p.pressureIteration = it == "cg"     ? SolverParams::PressureIteration::ConjugateGradient
+                              : it == "auto" ? SolverParams::PressureIteration::Auto
+                                             : SolverParams::PressureIteration::Jacobi;
     }
     p.artificialViscosity = r.numberInRange("artificial_viscosity", p.artificialViscosity, 0, 1);
     p.viscosityTolerance = r.number("viscosity_tolerance", p.viscosityTolerance);

@@ -1,8 +1,8 @@
 // Divergence-free SPH (Bender & Koschier 2017): a divergence solve keeps the velocity
 // field divergence-free, a constant-density solve corrects the predicted density, both
 // by relaxed Jacobi iterations on the pressure Poisson system, warm-started. The density
-// solve hands over to conjugate gradients when Jacobi's progress says it would be slow
-// (sim.pressure_iteration = "auto", the default), or runs them first ("cg"). Steps are
+// solve may hand over to conjugate gradients when Jacobi's progress says it would stop at
+// its cap (sim.pressure_iteration = "auto"), or run them first ("cg"). Steps are
 // about ten times longer than WCSPH's.
 #include "sim/sph/PressureSolver.hpp"
 

@@ -39,7 +39,7 @@ using namespace ferro;
 
 namespace {
 
-SimScene damBreak40k(const std::string& kind, double surfaceTension, const std::string& iteration = "auto",
+SimScene damBreak40k(const std::string& kind, double surfaceTension, const std::string& iteration = "jacobi",
                      double densityError = 0, int widen = 1) {
     SimScene s;
     s.path = "bench dam break";
@@ -138,7 +138,7 @@ int main(int argc, char** argv) {
     int threads = 2;
     double seconds = 0.1, warmup = 0.05;
     double sample = 0.005;
-    std::string solver = "all", tension = "all", iteration = "auto";
+    std::string solver = "all", tension = "all", iteration = "jacobi";
     double densityError = 0;
     int widen = 1;
     const char* usage = "usage: bench-sim [--threads N] [--seconds S] [--warmup S] [--solver all|wcsph|dfsph] "
