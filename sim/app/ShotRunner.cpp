@@ -9,6 +9,7 @@
 #include "sim/core/ParticleFile.hpp"
 #include "sim/core/SceneDocument.hpp"
 
+#include <algorithm>
 #include <chrono>
 #include <cmath>
 #include <cstdio>
@@ -16,6 +17,8 @@
 #include <iostream>
 #include <regex>
 #include <sstream>
+#include <utility>
+#include <vector>
 
 namespace fs = std::filesystem;
 
@@ -256,10 +259,22 @@ void runShot(const SimScene& scene, const RunOptions& opt) {
             const double perStep = 1.0 / double(std::max<size_t>(fc.steps, 1));
             std::string how;
             if (fc.densityByCg > 0) how = " (cg " + std::to_string(fc.densityByCg) + "/" + std::to_string(fc.steps) + ")";
+            // What bounded the frame's steps, most often first (FluidSimulation::chooseTimeStep).
+            std::string bounds;
+            {
+                std::vector<std::pair<size_t, int>> order;
+                for (int b = 0; b < int(TimeStepBound::Count); ++b)
+                    if (fc.dtBounds[b] > 0) order.emplace_back(fc.dtBounds[b], b);
+                std::sort(order.begin(), order.end(), [](const auto& a, const auto& b) { return a.first > b.first; });
+                for (const auto& [count, b] : order)
+                    bounds += (bounds.empty() ? " (" : ", ") + std::string(timeStepBoundName(TimeStepBound(b))) + " " +
+                              std::to_string(count);
+                if (!bounds.empty()) bounds += ")";
+            }
             std::fprintf(stderr,
-                         "frame %4d/%d  t %.4f s  %5zu steps  %6.1f steps/s  dt %.2e s  iter p %.1f%s d %.1f  "
+                         "frame %4d/%d  t %.4f s  %5zu steps  %6.1f steps/s  dt %.2e s%s  iter p %.1f%s d %.1f  "
                          "rho err %.3f%%%s  ETA %s\n",
-                         frame, lastFrame, sim.time(), steps, steps / std::max(frameSec, 1e-9), st.dt,
+                         frame, lastFrame, sim.time(), steps, steps / std::max(frameSec, 1e-9), st.dt, bounds.c_str(),
                          double(fc.pressureIterations) * perStep, how.c_str(), double(fc.divergenceIterations) * perStep,
                          100 * st.densityError, mag.c_str(), formatSeconds(eta).c_str());
         }

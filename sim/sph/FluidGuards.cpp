@@ -126,6 +126,7 @@ void FluidSimulation::checkSanity() {
 void SolverCapCount::add(const StepStats& s) {
     ++steps;
     densityByCg += s.densityByCg;
+    ++dtBounds[int(s.dtBound)];
     pressureIterations += size_t(std::max(s.pressureIterations, 0));
     divergenceIterations += size_t(std::max(s.divergenceIterations, 0));
     if (s.densityAtCap) {

@@ -331,7 +331,7 @@ double FluidSimulation::maxSpeed(size_t* which) const {
     return std::sqrt(double(vmax));
 }
 
-double FluidSimulation::chooseTimeStep(double dtLimit, double speed, double* stable) const {
+double FluidSimulation::chooseTimeStep(double dtLimit, double speed, double* stable, TimeStepBound* bound) const {
     // Force criterion (Monaghan 1992): dt <= 0.25 sqrt(h / |a|), h the smoothing length,
     // half the cubic spline's support (the spacing here): the body force moves a particle
     // at most a dt^2 = spacing / 16 in a step before pressure answers; a strong Kelvin force
@@ -342,10 +342,18 @@ double FluidSimulation::chooseTimeStep(double dtLimit, double speed, double* sta
     const double amax = scene_.solver.gravity.norm() + (magnetics_ ? magnetics_->maxAcceleration() : 0.0);
     const SolverParams& sp = scene_.solver;
     double dt = sp.maxDt;
-    dt = std::min(dt, solver_->maxTimeStep(speed));
-    dt = std::min(dt, pairForces_->tensionStepLimit());
-    if (amax > 0) dt = std::min(dt, 0.25 * std::sqrt(0.5 * h_ / amax));
-    if (!implicitViscosity_) dt = std::min(dt, explicitViscousTimeStep());
+    TimeStepBound by = TimeStepBound::MaxDt;
+    auto bind = [&](double limit, TimeStepBound which) {
+        if (limit < dt) {
+            dt = limit;
+            by = which;
+        }
+    };
+    bind(solver_->maxTimeStep(speed), TimeStepBound::Cfl);
+    bind(pairForces_->tensionStepLimit(), TimeStepBound::Capillary);
+    if (amax > 0) bind(0.25 * std::sqrt(0.5 * h_ / amax), TimeStepBound::BodyForce);
+    if (!implicitViscosity_) bind(explicitViscousTimeStep(), TimeStepBound::Viscous);
+    if (bound) *bound = by;
     if (dt < sp.minDt) {
         std::ostringstream msg;
         msg.precision(3);
@@ -417,7 +425,7 @@ double FluidSimulation::step(double dtLimit) {
     const double speed = maxSpeed(&fastest);
     checkSpeed(speed, fastest);
     double stableDt = 0;
-    const double dt = chooseTimeStep(dtLimit, speed, &stableDt);
+    const double dt = chooseTimeStep(dtLimit, speed, &stableDt, &stats_.dtBound);
     // A step near sim.min_dt that lasts: the run would crawl for hours before (if ever)
     // failing. The stable step counts, not the one shortened to land on a frame's end
     // (that one used to reset the count, so a stuck run whose frames took fewer than

@@ -38,8 +38,19 @@ public:
 };
 
 /// Counters of the most recent step, for progress lines and benchmarks.
+/// What bounded a step's length (FluidSimulation::chooseTimeStep): sim.max_dt, the pressure
+/// solver's CFL bound, the capillary bound, the body-force criterion, the explicit viscous
+/// bound; the step shortened to land on a frame's end is counted by the bound it would have had.
+enum class TimeStepBound { MaxDt, Cfl, Capillary, BodyForce, Viscous, Count };
+/// Short names for the progress line, in TimeStepBound order.
+inline const char* timeStepBoundName(TimeStepBound b) {
+    static const char* const names[] = {"max_dt", "cfl", "capillary", "force", "viscous"};
+    return names[int(b)];
+}
+
 struct StepStats {
     double dt = 0;
+    TimeStepBound dtBound = TimeStepBound::MaxDt; ///< what bounded the step (chooseTimeStep)
     int pressureIterations = 0;
     int divergenceIterations = 0;
     double densityError = 0;     ///< mean relative compression after the step's solve
@@ -64,6 +75,7 @@ struct SolverCapCount {
     double densityError = 0;      ///< largest mean relative compression a capped density solve left
     double divergenceError = 0;   ///< largest mean relative compression per step a capped divergence solve left
     size_t densityByCg = 0;       ///< steps whose density solve ran conjugate gradients
+    size_t dtBounds[int(TimeStepBound::Count)] = {}; ///< steps each bound bounded
     size_t pressureIterations = 0;   ///< density solve iterations, summed over the steps
     size_t divergenceIterations = 0; ///< divergence solve iterations, summed over the steps
     void add(const StepStats& s);
@@ -247,7 +259,7 @@ private:
     void computeSurfaceView();
     /// The step: the smallest of the solver's, the force, capillary and viscous limits and
     /// sim.max_dt (`stable`, when given), then shortened to land on dtLimit.
-    double chooseTimeStep(double dtLimit, double speed, double* stable = nullptr) const;
+    double chooseTimeStep(double dtLimit, double speed, double* stable = nullptr, TimeStepBound* bound = nullptr) const;
     double maxSpeed(size_t* which = nullptr) const;
     /// The speed bound's parts that do not change during the run (gravity over the
     /// container's height, initial speeds, the magnets' motion, capillary speed).
