@@ -17,6 +17,7 @@
 #include <algorithm>
 #include <cmath>
 #include <limits>
+#include <optional>
 
 namespace ferro {
 
@@ -448,16 +449,28 @@ Displaced displaceAndConserve(const SurfaceFields& fields, const std::vector<Pat
     return {std::move(wall), std::move(weight)};
 }
 
-// `surface` displaced as the earlier input's spikes displaced it (their patterns `before`
-// and fields, unrefined): what the spikes that have gone since stood as.
-TriangleMesh earlierSpikySurface(const TriangleMesh& surface, const SurfaceFields& fields, const SpikeInput& earlier,
-                                 const std::vector<Pattern>& before, const SpikeParams& P, double volumeIn)
+// The lattice the earlier input had (phases 1-3 on it), for the spikes' own motion since then.
+struct EarlierLattice {
+    EarlierLattice(const SpikeInput& earlier, const SpikeParams& P, double Mc) : input(earlier), params(P), fields(earlier, P, Mc)
+    {
+        InputRegion region;
+        patterns = tracePatterns(earlier, P, fields, Mc, region);
+    }
+    const SpikeInput& input;
+    const SpikeParams& params;
+    const SurfaceFields fields;
+    std::vector<Pattern> patterns;
+};
+
+// `surface` displaced as the earlier lattice displaced it (unrefined): what the spikes that
+// have gone since stood as.
+TriangleMesh earlierSpikySurface(const TriangleMesh& surface, const EarlierLattice& then, double volumeIn)
 {
     RefinedSurface unrefined{surface, areaWeightedNormals(surface), std::numeric_limits<double>::infinity(), false};
-    for (const Pattern& p : before) unrefined.minSpacing = std::min(unrefined.minSpacing, p.info.spacing);
-    TriangleMesh then = surface;
-    displaceAndConserve(fields, before, earlier, P, unrefined, volumeIn, then);
-    return then;
+    for (const Pattern& p : then.patterns) unrefined.minSpacing = std::min(unrefined.minSpacing, p.info.spacing);
+    TriangleMesh out = surface;
+    displaceAndConserve(then.fields, then.patterns, then.input, then.params, unrefined, volumeIn, out);
+    return out;
 }
 
 } // namespace
@@ -492,12 +505,10 @@ SpikeResult addSpikes(const SpikeInput& in, const SpikeParams& params, const Spi
         // No spikes now; spikes that were there a moment ago sink where they stood.
         res = unchangedResult(std::move(res), in.surface);
         if (before && !res.mesh.velocities.empty()) {
-            const SurfaceFields fieldsThen(*before, Pthen, Mc);
-            InputRegion regionThen;
-            const std::vector<Pattern> then = tracePatterns(*before, Pthen, fieldsThen, Mc, regionThen);
-            if (!then.empty())
-                addSinkingVelocity(res.mesh.velocities, in.surface,
-                                   earlierSpikySurface(in.surface, fieldsThen, *before, then, Pthen, res.volumeIn), interval);
+            const EarlierLattice then(*before, Pthen, Mc);
+            if (!then.patterns.empty())
+                addSinkingVelocity(res.mesh.velocities, in.surface, earlierSpikySurface(in.surface, then, res.volumeIn),
+                                   interval);
         }
         return res;
     }
@@ -511,14 +522,10 @@ SpikeResult addSpikes(const SpikeInput& in, const SpikeParams& params, const Spi
     res.volumeOut = enclosedVolume(res.mesh);
     const std::vector<Vec3> surfaceVelocity = surfaceVelocityAt(in.surface, refined.mesh.vertices);
     if (!surfaceVelocity.empty()) {
-        std::vector<Pattern> then;
-        if (before) {
-            const SurfaceFields fieldsThen(*before, Pthen, Mc);
-            InputRegion regionThen;
-            then = tracePatterns(*before, Pthen, fieldsThen, Mc, regionThen);
-        }
+        const std::optional<EarlierLattice> then =
+            before ? std::make_optional<EarlierLattice>(*before, Pthen, Mc) : std::nullopt;
         res.mesh.velocities = spikyVelocities(res.mesh, refined, surfaceVelocity, displaced.weight, patterns,
-                                              tipMotions(patterns, before ? &then : nullptr, interval));
+                                              tipMotions(patterns, then ? &then->patterns : nullptr, interval));
     }
     computeVertexNormals(res.mesh);
     res.refined = std::move(refined.mesh);

@@ -37,7 +37,6 @@ public:
     using std::runtime_error::runtime_error;
 };
 
-/// Counters of the most recent step, for progress lines and benchmarks.
 /// What bounded a step's length (FluidSimulation::chooseTimeStep): sim.max_dt, the pressure
 /// solver's CFL bound, the capillary bound, the body-force criterion, the explicit viscous
 /// bound; the step shortened to land on a frame's end is counted by the bound it would have had.
@@ -48,6 +47,7 @@ inline const char* timeStepBoundName(TimeStepBound b) {
     return names[int(b)];
 }
 
+/// Counters of the most recent step, for progress lines and benchmarks.
 struct StepStats {
     double dt = 0;
     TimeStepBound dtBound = TimeStepBound::MaxDt; ///< what bounded the step (chooseTimeStep)
@@ -67,7 +67,9 @@ struct StepStats {
 
 /// How often the pressure solver stopped at its iteration cap (sim.max_iterations) with
 /// its error still above the tolerance, over a span of steps (a frame, a run): never
-/// silent, the progress line, the frame file's header and the closing line show it.
+/// silent, the progress line, the frame file's header and the closing line show it. Also
+/// the span's iterations, the density solves that ran CG and what bounded each step, for
+/// the progress line.
 struct SolverCapCount {
     size_t steps = 0;             ///< steps counted
     size_t densityAtCap = 0;      ///< steps whose density solve ended at the cap
