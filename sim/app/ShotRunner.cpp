@@ -146,7 +146,7 @@ void runShot(const SimScene& scene, const RunOptions& opt) {
             continue;
         }
         const std::string fp = t.comment("scene_fingerprint");
-        if (fp != opt.fingerprint)
+        if (fp != opt.fingerprint && (opt.legacyFingerprint.empty() || fp != opt.legacyFingerprint))
             throw SceneError(particleFramePath(opt.outDir, *it) +
                              ": written from a different scene or --set overrides; resume with the same ones, or --overwrite");
         if (t.rows() != sim.size())

@@ -13,6 +13,9 @@ struct RunOptions {
     bool overwrite = false;    ///< discard frames already in outDir and start over
     bool quiet = false;        ///< no progress lines on stderr
     std::string fingerprint;   ///< scene fingerprint written to each file and checked on resume
+    /// Also accepted on resume: the whole scene document's hash, which frames written before
+    /// 2026-12-07 carry (empty = none).
+    std::string legacyFingerprint;
     /// [shot] preroll: where the settled state is cached (empty = outDir/preroll.ply), and
     /// the hash of the sections it depends on (empty = `fingerprint`, the whole scene).
     std::string prerollCache;

@@ -49,7 +49,11 @@ int main(int argc, char** argv) {
         SceneDocument doc = SceneDocument::load(scenePath, overrides);
         if (printInputs)
             return printSceneInputs(doc, [](const SceneDocument& d) { parseSimScene(d); });
+        // The fingerprint hashes the keys the simulation reads, so that a render, surface or
+        // spikes key edited mid-shot leaves its frames resumable (sim.threads changes no bit).
+        doc.recordReads();
         const SimScene scene = parseSimScene(doc);
+        const std::string fingerprint = doc.readsFingerprint({"sim.threads"});
         if (printSize) {
             const RunSize size = estimateRunSize(scene);
             const int lastFrame = opt.maxFrames >= 0 ? std::min(opt.maxFrames, scene.shot.frameCount())
@@ -58,10 +62,11 @@ int main(int argc, char** argv) {
                       << " boundary_particles=" << std::llround(size.boundaryParticles)
                       << " bytes=" << std::llround(size.bytes) << " spacing=" << size.spacing << " frames=" << lastFrame + 1
                       << " fps=" << scene.shot.fps << " preroll=" << scene.shot.preroll
-                      << " scene_fingerprint=" << doc.fingerprint() << "\n";
+                      << " scene_fingerprint=" << fingerprint << "\n";
             return kExitOk;
         }
-        opt.fingerprint = doc.fingerprint();
+        opt.fingerprint = fingerprint;
+        opt.legacyFingerprint = doc.fingerprint();
         // The solids are walls the pre-roll settles against; a scene without them keeps the
         // fingerprint it always had (its cached pre-roll stays valid).
         std::vector<std::string> prerollSections{"fluid", "container", "sim", "magnetization"};

@@ -208,6 +208,16 @@ std::string SceneDocument::readsText() const
     return out;
 }
 
+std::string SceneDocument::readsFingerprint(const std::vector<std::string>& ignore) const
+{
+    std::string text;
+    if (reads_)
+        for (const auto& [key, value] : reads_->values)
+            if (value != "(absent)" && std::find(ignore.begin(), ignore.end(), key) == ignore.end())
+                text += key + " = " + value + "\n";
+    return hashHex(text);
+}
+
 std::string SceneDocument::fingerprint(const std::vector<std::string>& sections) const
 {
     std::ostringstream text;

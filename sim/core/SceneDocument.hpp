@@ -120,6 +120,12 @@ public:
     /// `path.key = <TOML value>` or `path.key = (absent)`: the text of a stage's make stamp
     /// (scripts/shot.mk), which changes exactly when a value the stage read changes.
     std::string readsText() const;
+    /// Stable hash of the keys read since recordReads() that the document sets, `ignore`d
+    /// keys left out. Absent keys are left out too: their values are the code's defaults, and
+    /// a key a newer version learns to read must not change the hash of an unchanged scene.
+    /// It changes exactly when a value the stage read from the scene changes, so an edit to a
+    /// section the stage never reads (a camera, the spikes) leaves it as it was.
+    std::string readsFingerprint(const std::vector<std::string>& ignore = {}) const;
     /// The same keys with what the getter that read each one checks, one line each,
     /// `path.key<TAB>type and range<TAB>default` ("required" when there is none, "-" for keys
     /// read as raw nodes): the code's own key table, from which docs/reference/scene.md is

@@ -331,6 +331,22 @@ max = [0.01, 0.01, 0.02]
         for (int f = 0; f <= 3; ++f) REQUIRE(headerFrame(f) == f);
         REQUIRE(slurp(frame(out, 2)) == f2);
     }
+    SECTION("a key the simulation does not read (the camera) keeps the frames resumable; one it reads does not") {
+        fresh(2);
+        const std::string f2 = slurp(frame(out, 2));
+        const CommandResult camera =
+            run(sim + " --max-frames 3 --resume --set render.camera_position=[0,-0.1,0.05] --set sim.threads=1");
+        CAPTURE(camera.output);
+        REQUIRE(camera.code == 0);
+        REQUIRE(camera.output.find("resuming after frame 2") != std::string::npos);
+        REQUIRE(slurp(frame(out, 2)) == f2);
+        const CommandResult gravity = run(sim + " --max-frames 4 --resume --set sim.gravity=[0,0,-9.7]");
+        CAPTURE(gravity.output);
+        REQUIRE(gravity.code == 2);
+        REQUIRE(lines(gravity.output) == 1);
+        REQUIRE(gravity.output.find("particles_0003.ply: written from a different scene") != std::string::npos);
+        REQUIRE(!fs::exists(frame(out, 4)));
+    }
     SECTION("no frame 0: refused with one line, nothing touched") {
         fresh(2);
         fs::remove(frame(out, 0));

@@ -583,6 +583,26 @@ TEST_CASE("fingerprint", "[scene]")
     CHECK(SceneDocument::parse(kMinimal, "a.toml", {"shot.fps=30"}).fingerprint() != a);
 }
 
+TEST_CASE("the simulation's fingerprint hashes the keys it reads and sets, nothing else", "[scene]")
+{
+    auto simFingerprint = [](const std::string& text, const std::vector<std::string>& overrides = {}) {
+        SceneDocument doc = SceneDocument::parse(text, "a.toml", overrides);
+        doc.recordReads();
+        parseSimScene(doc);
+        return doc.readsFingerprint({"sim.threads"});
+    };
+    const std::string a = simFingerprint(kMinimal);
+    CHECK(a.size() == 16);
+    CHECK(simFingerprint(kMinimal) == a);
+    // Sections and keys the simulation does not read, and the ignored sim.threads.
+    CHECK(simFingerprint(kMinimal + "[render]\nwidth = 64\n[spikes]\nresolution = 4\n") == a);
+    CHECK(simFingerprint(kMinimal, {"render.camera_position=[0,-0.1,0.05]", "sim.threads=1"}) == a);
+    // Keys it reads: set to a value, even its default, they change it.
+    CHECK(simFingerprint(kMinimal, {"fluid.block.0.count=2000"}) != a);
+    CHECK(simFingerprint(kMinimal, {"sim.gravity=[0,0,-9.7]"}) != a);
+    CHECK(simFingerprint(kMinimal, {"shot.fps=30"}) != a);
+}
+
 TEST_CASE("examples/annotated.toml parses", "[scene]")
 {
     SimScene s = loadSimScene(std::string(FERRO_SOURCE_DIR) + "/examples/annotated.toml");
