@@ -64,17 +64,8 @@ void warnAboutSolverCap(const FluidSimulation& sim, int frame, bool& warned) {
     const SolverCapCount& caps = sim.frameSolverCaps();
     if (warned || 10 * caps.atCap() <= caps.steps) return;
     warned = true;
-    const SolverParams& sp = sim.scene().solver;
-    const bool density = caps.densityAtCap >= caps.divergenceAtCap;
-    std::fprintf(stderr,
-                 "ferro-sim: warning: frame %d: the %s solve stopped at its iteration cap (sim.max_iterations = %d) in "
-                 "%zu of %zu steps, leaving a mean compression of up to %.3g %% against sim.%s = %.3g %%: raise "
-                 "sim.max_iterations or lower sim.max_dt\n",
-                 frame, density ? "density" : "divergence", sp.maxIterations,
-                 density ? caps.densityAtCap : caps.divergenceAtCap, caps.steps,
-                 100 * (density ? caps.densityError : caps.divergenceError),
-                 density ? "max_density_error" : "max_divergence_error",
-                 100 * (density ? sp.maxDensityError : sp.maxDivergenceError));
+    const std::string why = sim.pressureSolverCapWarning(caps);
+    if (!why.empty()) std::fprintf(stderr, "ferro-sim: warning: frame %d: %s\n", frame, why.c_str());
 }
 
 std::string magnetSummary(const FluidSimulation& sim) {

@@ -2,6 +2,7 @@
 // Parses arguments and calls the ferro_app library; nothing else lives here.
 #include "sim/core/CommandLine.hpp"
 #include "sim/sph/FluidSimulation.hpp"
+#include "sim/sph/PressureSolver.hpp"
 #include "sim/core/ParticleFile.hpp"
 #include "sim/core/SceneDocument.hpp"
 #include "sim/scene/SimSceneFile.hpp"
@@ -48,11 +49,15 @@ int main(int argc, char** argv) {
     return runCommandLine("ferro-sim", app, argc, argv, errors, [&] {
         SceneDocument doc = SceneDocument::load(scenePath, overrides);
         if (printInputs)
-            return printSceneInputs(doc, [](const SceneDocument& d) { parseSimScene(d); });
+            return printSceneInputs(doc, [](const SceneDocument& d) {
+                const SimScene scene = parseSimScene(d);
+                parsePressureSolverKeys(scene.solver, scene.path);
+            });
         // The fingerprint hashes the keys the simulation reads, so that a render, surface or
         // spikes key edited mid-shot leaves its frames resumable (sim.threads changes no bit).
         doc.recordReads();
         const SimScene scene = parseSimScene(doc);
+        parsePressureSolverKeys(scene.solver, scene.path);   // its own [sim] keys, checked before any run
         const std::string fingerprint = doc.readsFingerprint({"sim.threads"});
         if (printSize) {
             const RunSize size = estimateRunSize(scene);

@@ -73,7 +73,7 @@ struct SceneDocument::ReadLog {
     std::map<std::string, std::pair<std::string, std::string>> specs; // "path.key" -> type, default
 };
 
-SceneDocument::SceneDocument() : root_(std::make_unique<toml::table>()) {}
+SceneDocument::SceneDocument() : root_(std::make_shared<toml::table>()) {}
 SceneDocument::SceneDocument(SceneDocument&&) noexcept = default;
 SceneDocument::~SceneDocument() = default;
 
@@ -119,6 +119,18 @@ bool SceneDocument::hasSection(const std::string& name) const
     return root_->contains(name);
 }
 
+std::shared_ptr<const SceneDocument> SceneDocument::subset(const std::string& name,
+                                                           const std::vector<std::string>& keys) const
+{
+    auto out = std::shared_ptr<SceneDocument>(new SceneDocument());
+    out->path_ = path_;
+    out->root_ = root_;
+    out->reads_ = reads_;
+    out->subsetSection_ = name;
+    out->subsetKeys_ = keys;
+    return out;
+}
+
 TableReader SceneDocument::section(const std::string& name) const
 {
     const toml::node* n = root_->get(name);
@@ -128,7 +140,12 @@ TableReader SceneDocument::section(const std::string& name) const
     if (!t)
         throw SceneError(locate(*n, path_) + ": " + name + ": expected a table [" + name + "] (got " +
                          typeName(*n) + ")");
-    return TableReader(*this, *t, name);
+    TableReader reader(*this, *t, name);
+    if (name == subsetSection_)
+        for (const auto& [key, node] : *t)
+            if (std::find(subsetKeys_.begin(), subsetKeys_.end(), std::string(key.str())) == subsetKeys_.end())
+                reader.ignore(std::string(key.str()));
+    return reader;
 }
 
 std::string SceneDocument::directory() const
@@ -160,7 +177,7 @@ std::string SceneDocument::fingerprint() const
 void SceneDocument::recordReads()
 {
     if (!reads_)
-        reads_ = std::make_unique<ReadLog>();
+        reads_ = std::make_shared<ReadLog>();
 }
 
 void SceneDocument::noteRead(const std::string& tablePath, const std::string& key, const toml::node* n) const

@@ -72,6 +72,11 @@ public:
 
     /// Throws if the table holds a key no getter consumed.
     void finish() const;
+    /// The table's keys no getter has consumed so far, in file order (for a later parser of
+    /// the rest of the table: SceneDocument::subset).
+    std::vector<std::string> unread() const;
+    /// Counts `key` as consumed: finish() passes it over.
+    void ignore(const std::string& key) const;
     /// "file:line" of the table, or of one key if it is present.
     std::string where(const std::string& key = {}) const;
     [[noreturn]] void fail(const std::string& key, const std::string& message) const;
@@ -103,6 +108,12 @@ public:
     bool hasSection(const std::string& name) const;
     const std::string& path() const { return path_; }
     std::string directory() const;
+    /// This document seen through section `name` restricted to `keys`: its reader of that
+    /// section counts every other key as consumed, so its finish() rejects only what its own
+    /// parser leaves unread; messages name the scene's lines as here. For a parser that reads
+    /// part of a section later and apart from the rest (a pressure solver's own [sim] keys).
+    /// While this document records its reads, so does the subset, into the same log.
+    std::shared_ptr<const SceneDocument> subset(const std::string& name, const std::vector<std::string>& keys) const;
     /// Rejects top-level keys that are not a known section of any stage.
     void checkSections(const std::vector<std::string>& known) const;
     /// Stable hash of the document (after overrides), to detect a changed scene on resume.
@@ -141,9 +152,12 @@ public:
 private:
     SceneDocument();
     std::string path_;
-    std::unique_ptr<toml::table> root_;
+    std::shared_ptr<toml::table> root_;   // shared with the subsets
+    /// A subset's section and the keys it shows (the rest its reader treats as consumed).
+    std::string subsetSection_;
+    std::vector<std::string> subsetKeys_;
     struct ReadLog;
-    std::unique_ptr<ReadLog> reads_;
+    std::shared_ptr<ReadLog> reads_;   // shared with the subsets made while recording
 };
 
 /// 16 hex digits of a stable 64-bit hash (FNV-1a) of `text`.

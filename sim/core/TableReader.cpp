@@ -324,6 +324,16 @@ std::vector<TableReader> TableReader::tables(const std::string& key) const
     return out;
 }
 
+std::vector<std::string> TableReader::unread() const
+{
+    std::vector<std::string> out;
+    for (const auto& [key, n] : keysInFileOrder(*table_, doc_->path()))
+        if (!used_->keys.count(key)) out.push_back(key);
+    return out;
+}
+
+void TableReader::ignore(const std::string& key) const { used_->keys.insert(key); }
+
 void TableReader::finish() const
 {
     for (const auto& [key, n] : keysInFileOrder(*table_, doc_->path()))

@@ -10,10 +10,13 @@
 #include "sim/geometry/ContainerParams.hpp"
 #include "sim/core/Types.hpp"
 
+#include <memory>
 #include <string>
 #include <vector>
 
 namespace ferro {
+
+class SceneDocument;
 
 /// A region filled with fluid particles at the start of the shot ([[fluid.block]]).
 struct FluidBlock {
@@ -61,23 +64,6 @@ struct SolverParams {
     double cfl = 0.4;                 ///< CFL number (step <= cfl * spacing / vmax)
     double maxDt = 0.001;             ///< upper bound of the time step [s]
     double minDt = 1e-7;              ///< lower bound; a smaller step aborts the run [s]
-    double soundSpeed = 0.0;          ///< WCSPH speed of sound [m/s]; 0 = 10x the largest expected speed
-    /// DFSPH: mean relative density error tolerance (0.02 %): a looser one left a pool over a
-    /// still magnet jittering. Measurements: docs/physics/sph-solver.md, "Density tolerance".
-    double maxDensityError = 0.0002;
-    double maxDivergenceError = 0.001;///< DFSPH: mean relative density change per step left by the divergence solve (0.1 %)
-    int maxIterations = 100;          ///< DFSPH: iteration cap of each solve
-    /// DFSPH: how the density solve iterates (`sim.pressure_iteration`). Jacobi (default):
-    /// SPlisHSPlasH's relaxed Jacobi, warm-started from 0.8 of the last pressure where the step
-    /// compresses. Auto: each step starts with Jacobi and hands over to conjugate gradients when
-    /// Jacobi's own rate of progress says it would not reach the tolerance within
-    /// sim.max_iterations (deep layers: Jacobi's sweeps grow with the square of the depth in
-    /// particles, CG's with the depth); not the default, because the steps CG solves leave a
-    /// pool over a magnet less at rest. CG: conjugate gradients from the start on the same
-    /// (symmetric) system, then Jacobi sweeps to the tolerance. Measurements:
-    /// docs/physics/sph-solver.md, "Choosing the density iteration".
-    enum class PressureIteration { Jacobi, Auto, ConjugateGradient };
-    PressureIteration pressureIteration = PressureIteration::Jacobi;
     /// Artificial viscosity alpha, dimensionless: adds alpha * h * U to the kinematic
     /// viscosity (h the kernel support, U the flow speed scale of the scene). SPH at
     /// millimetre spacing cannot resolve the tiny physical viscosity of water or oil; this
@@ -92,6 +78,12 @@ struct SolverParams {
     /// the scene's energy sources (sim/sph/SanityGuard.hpp). For scenes that drive the
     /// fluid by means the derived bound does not know.
     double maxSpeed = 0.0;
+    /// The [sim] keys that belong to the chosen pressure solver (sim.max_density_error,
+    /// sim.sound_speed, ...): every [sim] key the parser above does not read, as the scene
+    /// set them. Each solver's registry row reads its own from here, with their defaults and
+    /// checks (sim/sph/PressureSolver.hpp), so a new solver's keys need no line in this file.
+    /// Null = none set (every default).
+    std::shared_ptr<const SceneDocument> solverKeys;
 };
 
 /// [shot]: timing of the output.

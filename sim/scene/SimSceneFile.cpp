@@ -150,16 +150,6 @@ SolverParams parseSolver(const SceneDocument& doc)
     p.minDt = r.positive("min_dt", p.minDt);
     if (!(p.minDt < p.maxDt))
         r.fail("min_dt", "must be < sim.max_dt (got " + formatNumber(p.minDt) + " >= " + formatNumber(p.maxDt) + ")");
-    p.soundSpeed = r.nonNegative("sound_speed", p.soundSpeed);
-    p.maxDensityError = r.positive("max_density_error", p.maxDensityError);
-    p.maxDivergenceError = r.positive("max_divergence_error", p.maxDivergenceError);
-    p.maxIterations = r.integerInRange("max_iterations", p.maxIterations, 1, INT_MAX);
-    {
-        const std::string it = r.choice("pressure_iteration", {"jacobi", "auto", "cg"}, "jacobi");
-        p.pressureIteration = it == "cg"     ? SolverParams::PressureIteration::ConjugateGradient
-                              : it == "auto" ? SolverParams::PressureIteration::Auto
-                                             : SolverParams::PressureIteration::Jacobi;
-    }
     p.artificialViscosity = r.numberInRange("artificial_viscosity", p.artificialViscosity, 0, 1);
     p.viscosityTolerance = r.number("viscosity_tolerance", p.viscosityTolerance);
     if (!(p.viscosityTolerance > 0 && p.viscosityTolerance < 1))
@@ -167,7 +157,9 @@ SolverParams parseSolver(const SceneDocument& doc)
     p.viscosityMaxIterations = r.integerInRange("viscosity_max_iterations", p.viscosityMaxIterations, 1, INT_MAX);
     p.threads = r.integerInRange("threads", p.threads, 0, INT_MAX);
     p.maxSpeed = r.nonNegative("max_speed", p.maxSpeed);
-    r.finish();
+    // The rest belongs to the pressure solver, whose registry row reads and checks it
+    // (unknown keys included) when the simulation is made.
+    p.solverKeys = doc.subset("sim", r.unread());
     return p;
 }
 
@@ -204,6 +196,11 @@ double parseShotFps(const SceneDocument& doc)
 SimScene loadSimScene(const std::string& path, const std::vector<std::string>& overrides)
 {
     return parseSimScene(SceneDocument::load(path, overrides));
+}
+
+std::shared_ptr<const SceneDocument> solverKeysFromText(const std::string& keys, const std::string& name)
+{
+    return std::make_shared<SceneDocument>(SceneDocument::parse("[sim]\n" + keys + "\n", name));
 }
 
 } // namespace ferro

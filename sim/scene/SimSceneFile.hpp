@@ -26,5 +26,8 @@ SimScene parseSimScene(const SceneDocument& doc, SceneUse use = SceneUse::Simula
 double parseShotFps(const SceneDocument& doc);
 /// load + parseSimScene.
 SimScene loadSimScene(const std::string& path, const std::vector<std::string>& overrides = {});
+/// SolverParams::solverKeys from the text of [sim] keys ("max_density_error = 2e-5"), for a
+/// scene made in code (tests, benchmarks); `name` stands in for the file in messages.
+std::shared_ptr<const SceneDocument> solverKeysFromText(const std::string& keys, const std::string& name = "(code)");
 
 } // namespace ferro

@@ -7,9 +7,12 @@
 #include "sim/sph/PressureSolver.hpp"
 
 #include "sim/core/ParticleLoops.hpp"
+#include "sim/core/SceneDocument.hpp"
 #include "sim/sph/FluidSimulation.hpp"
 
 #include <algorithm>
+#include <climits>
+#include <cstdio>
 #include <cmath>
 
 namespace ferro {
@@ -35,9 +38,33 @@ constexpr double kDensityWarmStart = 0.8;
 constexpr int kFirstJudgement = 6;
 constexpr int kRateWindow = 3;
 
+/// DFSPH's own [sim] keys (parseDfsphKeys).
+struct DfsphSettings final : PressureSolverSettings {
+    /// sim.max_density_error: mean relative density error the density solve stops at (0.02 %):
+    /// a looser one left a pool over a still magnet jittering. Measurements:
+    /// docs/physics/sph-solver.md, "Density tolerance".
+    double maxDensityError = 0.0002;
+    /// sim.max_divergence_error: mean relative density change per step the divergence solve
+    /// leaves (0.1 %).
+    double maxDivergenceError = 0.001;
+    /// sim.max_iterations: the iteration cap of each solve.
+    int maxIterations = 100;
+    /// sim.pressure_iteration: how the density solve iterates. Jacobi (default):
+    /// SPlisHSPlasH's relaxed Jacobi, warm-started from 0.8 of the last pressure where the step
+    /// compresses. Auto: each step starts with Jacobi and hands over to conjugate gradients when
+    /// Jacobi's own rate of progress says it would not reach the tolerance within
+    /// max_iterations (deep layers: Jacobi's sweeps grow with the square of the depth in
+    /// particles, CG's with the depth); not the default, because the steps CG solves leave a
+    /// pool over a magnet less at rest. CG: conjugate gradients from the start on the same
+    /// (symmetric) system, then Jacobi sweeps to the tolerance. Measurements:
+    /// docs/physics/sph-solver.md, "Choosing the density iteration".
+    enum class Iteration { Jacobi, Auto, ConjugateGradient };
+    Iteration iteration = Iteration::Jacobi;
+};
+
 class DfsphSolver final : public PressureSolver {
 public:
-    explicit DfsphSolver(FluidSimulation& sim) : sim_(sim) {}
+    DfsphSolver(FluidSimulation& sim, const DfsphSettings& settings) : sim_(sim), settings_(settings) {}
 
     bool storesGradients() const override { return true; }
 
@@ -64,6 +91,26 @@ public:
         if (kappaV_.size() == order.size()) ferro::permute(kappaV_, order);
     }
 
+    std::vector<std::pair<std::string, double>> settingValues() const override {
+        return {{"density_tol", settings_.maxDensityError},
+                {"divergence_tol", settings_.maxDivergenceError},
+                {"max_iterations", double(settings_.maxIterations)}};
+    }
+
+    std::string capWarning(const SolverCapCount& caps) const override {
+        const bool density = caps.densityAtCap >= caps.divergenceAtCap;
+        char text[400];
+        std::snprintf(text, sizeof text,
+                      "the %s solve stopped at its iteration cap (sim.max_iterations = %d) in %zu of %zu steps, leaving a "
+                      "mean compression of up to %.3g %% against sim.%s = %.3g %%: raise sim.max_iterations or lower sim.max_dt",
+                      density ? "density" : "divergence", settings_.maxIterations,
+                      density ? caps.densityAtCap : caps.divergenceAtCap, caps.steps,
+                      100 * (density ? caps.densityError : caps.divergenceError),
+                      density ? "max_density_error" : "max_divergence_error",
+                      100 * (density ? settings_.maxDensityError : settings_.maxDivergenceError));
+        return text;
+    }
+
     void resetWarmStart() override {
         kappaV_.assign(sim_.size(), Real(0));
     }
@@ -84,6 +131,7 @@ private:
     }
 
     FluidSimulation& sim_;
+    const DfsphSettings settings_;
     std::vector<Real> alpha_, kappa_, kappaV_, source_, residual_;
     std::vector<Real> change_;  // the density change of a field, per particle (FluidSimulation::divergence)
     std::vector<Real> cgResidual_, cgPreconditioned_, cgDirection_, cgProduct_; // conjugateGradient's vectors
@@ -301,9 +349,8 @@ void DfsphSolver::solveDivergence(double dt) {
         // Warm start from the previous step's solution (stored times dt).
         kappaV_[i] = div > 0 ? Real(0.5) * std::min(kappaV_[i], Real(0.5)) / Real(dt) : 0;
     });
-    const double eta = sim_.scene().solver.maxDivergenceError / dt;
-    sim_.solverStats().divergenceIterations =
-        relaxedJacobi(kappaV_, source_, dt, eta, 1, false, sim_.scene().solver.maxIterations);
+    const double eta = settings_.maxDivergenceError / dt;
+    sim_.solverStats().divergenceIterations = relaxedJacobi(kappaV_, source_, dt, eta, 1, false, settings_.maxIterations);
     sim_.pressureAccelerations(kappaV_);
     forEachParticle(n, [&](size_t i) {
         v[i] += Real(dt) * a[i];
@@ -344,14 +391,14 @@ void DfsphSolver::solveDensity(double dt) {
         // docs/physics/sph-solver.md, "The density solve's warm start".
         kappa_[i] = predicted > 1 ? Real(kDensityWarmStart) * std::min(p[i] * rho0 / (rho[i] * rho[i]), Real(0.00025) / h2) : 0;
     });
-    const SolverParams& sp = sim_.scene().solver;
-    using Iteration = SolverParams::PressureIteration;
+    const DfsphSettings& sp = settings_;
+    using Iteration = DfsphSettings::Iteration;
     // Auto: Jacobi first, then CG from where Jacobi stopped if its progress is too slow.
     // Whatever CG leaves (its set of pressured particles is fixed, kappa >= 0 is clamped
     // after) Jacobi sweeps finish, as after "cg".
     int jacobi = 0;
-    bool useCg = sp.pressureIteration == Iteration::ConjugateGradient;
-    if (sp.pressureIteration == Iteration::Auto)
+    bool useCg = sp.iteration == Iteration::ConjugateGradient;
+    if (sp.iteration == Iteration::Auto)
         jacobi = relaxedJacobi(kappa_, source_, dt * dt, sp.maxDensityError, 2, true, sp.maxIterations - 1, &useCg);
     const int cg = useCg ? conjugateGradient(kappa_, source_, dt * dt, sp.maxDensityError, sp.maxIterations - 1 - jacobi) : 0;
     const int finish = (jacobi > 0 && !useCg) ? 0
@@ -369,8 +416,20 @@ void DfsphSolver::solveDensity(double dt) {
 
 } // namespace
 
-std::unique_ptr<PressureSolver> makeDfsphSolver(FluidSimulation& sim) {
-    return std::make_unique<DfsphSolver>(sim);
+std::unique_ptr<PressureSolverSettings> parseDfsphKeys(const TableReader& r) {
+    auto s = std::make_unique<DfsphSettings>();
+    s->maxDensityError = r.positive("max_density_error", s->maxDensityError);
+    s->maxDivergenceError = r.positive("max_divergence_error", s->maxDivergenceError);
+    s->maxIterations = r.integerInRange("max_iterations", s->maxIterations, 1, INT_MAX);
+    const std::string it = r.choice("pressure_iteration", {"jacobi", "auto", "cg"}, "jacobi");
+    s->iteration = it == "cg"     ? DfsphSettings::Iteration::ConjugateGradient
+                   : it == "auto" ? DfsphSettings::Iteration::Auto
+                                  : DfsphSettings::Iteration::Jacobi;
+    return s;
+}
+
+std::unique_ptr<PressureSolver> makeDfsphSolver(FluidSimulation& sim, const PressureSolverSettings& settings) {
+    return std::make_unique<DfsphSolver>(sim, static_cast<const DfsphSettings&>(settings));
 }
 
 } // namespace ferro

@@ -96,16 +96,8 @@ void FluidSimulation::createPressureSolver() {
     // dozen times a step and keeps each pair's kernel gradient (so does the induced Kelvin
     // force); WCSPH sweeps them once and takes small steps, so it evaluates the kernel in
     // its sweep and searches only when a Verlet skin is used up.
-    try {
-        solverEntry_ = &findPressureSolver(scene_.solver.pressureSolver);
-    } catch (const std::invalid_argument&) {
-        std::string list;
-        for (const std::string& name : pressureSolverNames()) list += (list.empty() ? "\"" : ", \"") + name + "\"";
-        const std::string& where = scene_.solver.pressureSolverWhere;
-        throw SceneError((where.empty() ? scene_.path : where) + ": sim.solver: must be one of " + list +
-                         " (got \"" + scene_.solver.pressureSolver + "\")");
-    }
-    solver_ = solverEntry_->make(*this);
+    solverEntry_ = &chosenPressureSolver(scene_.solver, scene_.path);
+    solver_ = solverEntry_->make(*this, *parsePressureSolverKeys(scene_.solver, scene_.path));
     storeGradients_ = solver_->storesGradients();
     skin_ = solver_->neighborSkin() * h_;
 }
@@ -151,9 +143,9 @@ void FluidSimulation::sampleBoundary() {
 }
 
 void FluidSimulation::chooseSpeedScales() {
-    // Speed of sound for WCSPH: ten times the fastest expected flow speed keeps the
-    // density error near 1 % (Monaghan). The speed is the free-fall speed over the fluid's
-    // height above the container floor, or the initial speed, or the capillary speed.
+    // The flow speed scale U: the free-fall speed over the fluid's height above the
+    // container floor, or the initial speed, or the capillary speed (WCSPH's default sound
+    // speed is ten times it).
     const Vec3d g = scene_.solver.gravity;
     const double gNorm = g.norm();
     double vExpected = std::sqrt(std::max(0.0, scene_.fluid.surfaceTension) / (rho0_ * spacing_));
@@ -176,7 +168,6 @@ void FluidSimulation::chooseSpeedScales() {
         vExpected = std::max(vExpected, std::sqrt(2 * gNorm * std::max(top - bottom, spacing_)));
     }
     for (const Vec3& v : v_) vExpected = std::max(vExpected, double(v.norm()));
-    soundSpeed_ = scene_.solver.soundSpeed > 0 ? scene_.solver.soundSpeed : 10 * std::max(vExpected, 0.1);
     viscosity_ = scene_.fluid.viscosity + scene_.solver.artificialViscosity * h_ * std::max(vExpected, 0.01);
     expectedSpeed_ = vExpected;
 }

@@ -103,7 +103,10 @@ public:
     const SolverCapCount& frameSolverCaps() const { return frameCaps_; }
     const SolverCapCount& runSolverCaps() const { return runCaps_; }
     size_t stepCount() const { return steps_; }
-    double soundSpeed() const { return soundSpeed_; }  ///< expected flow speed x 10 (WCSPH) [m/s]
+    /// The scene's flow speed scale U [m/s]: the fastest of a fall through the fluid's height
+    /// above the container floor, the initial speeds and the capillary speed. It sets the
+    /// artificial viscosity alpha h U and WCSPH's default speed of sound.
+    double expectedSpeed() const { return expectedSpeed_; }
     double particleVolume() const { return volume_; }   ///< V = m / rho0 [m^3]
     /// The kinematic viscosity the fluid pairs use: fluid.viscosity plus the artificial
     /// viscosity alpha h U [m^2/s].
@@ -120,6 +123,10 @@ public:
     std::string pressureSolverSummary() const;
     /// The pressure solver's advice about this scene (PressureSolver::advice), or empty.
     std::string pressureSolverAdvice() const;
+    /// The settings the pressure solver chose, by name (PressureSolver::settingValues).
+    std::vector<std::pair<std::string, double>> pressureSolverSettings() const { return solver_->settingValues(); }
+    /// The pressure solver's line on a frame that kept stopping at its cap (PressureSolver::capWarning).
+    std::string pressureSolverCapWarning(const SolverCapCount& caps) const { return solver_->capWarning(caps); }
     /// The speed [m/s] of a fall through the magnets' largest energy difference over the
     /// places the fluid can reach during the shot (its fill and the walls' fluid side, a
     /// sample a frame, at most 256): sqrt(2 mu0 max dF / rho0) with F(H) = int M dH, the
@@ -236,7 +243,7 @@ public:
 
 private:
     // Construction, in order: the solver (it decides the neighbour search), the walls'
-    // boundary particles, the speed scales (WCSPH's speed of sound, artificial viscosity),
+    // boundary particles, the speed scales (the flow speed scale, artificial viscosity),
     // the pair-force models (viscosity, surface tension) and how viscosity is applied.
     void createPressureSolver();
     void sampleBoundary();
@@ -301,7 +308,6 @@ private:
     bool frameStart_ = true;                     // the next step starts a frame: re-solve M
     CubicSplineKernel kernel_;
     double spacing_ = 0, h_ = 0, mass_ = 0, volume_ = 0, rho0_ = 0;
-    double soundSpeed_ = 0;
     double viscosity_ = 0;   // physical plus artificial kinematic viscosity [m^2/s]
     double expectedSpeed_ = 0; // the flow speed scale U of chooseSpeedScales [m/s]
     std::unique_ptr<ImplicitViscosity> implicitViscosity_; // only with implicit viscosity

@@ -2,23 +2,37 @@
 // The pressure solver of an SPH step, behind one small interface.
 //
 // FluidSimulation owns the particles, the neighbour lists and the non-pressure forces; a
-// PressureSolver turns them into the step's velocity change and pressures. The solvers
-// are registered by name in sim/sph/PressureSolvers.cpp (the scene key `sim.solver`).
-// Adding one is one file and one line:
-//   1. sim/sph/MySolver.cpp: a class derived from PressureSolver and a factory
-//      `std::unique_ptr<PressureSolver> makeMySolver(FluidSimulation&)`;
-//   2. sim/sph/PressureSolvers.cpp: the factory's declaration and its row in the table.
+// PressureSolver turns them into the step's velocity change and pressures. A solver owns its
+// whole footprint: its [sim] keys (parsed by its registry row, from the keys the scene
+// parser leaves to it: SolverParams::solverKeys), its settings, its state between steps and
+// what its steps count. The solvers are registered by name in sim/sph/PressureSolvers.cpp
+// (the scene key `sim.solver`). Adding one is one file and one line:
+//   1. sim/sph/MySolver.cpp: a class derived from PressureSolver, its settings derived from
+//      PressureSolverSettings, and two functions: `parseMySolverKeys(const TableReader& sim)`
+//      reading its own [sim] keys, and `makeMySolver(FluidSimulation&, const
+//      PressureSolverSettings&)`;
+//   2. sim/sph/PressureSolvers.cpp: their declarations and the solver's row in the table.
 // A solver reads and writes the fluid through FluidSimulation's solver interface (the
 // section "For pressure solvers" of FluidSimulation.hpp).
 #include "sim/core/Types.hpp"
 
 #include <memory>
 #include <string>
+#include <utility>
 #include <vector>
 
 namespace ferro {
 
 class FluidSimulation;
+class TableReader;
+struct SolverCapCount;
+struct SolverParams;
+
+/// A solver's own settings, read from its [sim] keys by its registry row (each solver
+/// derives its own and casts back in its factory).
+struct PressureSolverSettings {
+    virtual ~PressureSolverSettings() = default;
+};
 
 class PressureSolver {
 public:
@@ -46,17 +60,27 @@ public:
     /// The settings a run chose for this solver, for the start line (e.g. WCSPH's speed of
     /// sound); empty when there is nothing to say.
     virtual std::string settingsSummary() const { return {}; }
+    /// The settings the run chose, by name ("c", "density_tol", ...): benchmarks print them
+    /// and hand them to a peer solver (tests/bench/bench_sim.cpp, scripts/bench-peer.sh).
+    virtual std::vector<std::pair<std::string, double>> settingValues() const { return {}; }
     /// One line of advice about the scene for this solver, printed after the start line
     /// (e.g. WCSPH under a strong magnet); empty when there is none.
     virtual std::string advice() const { return {}; }
+    /// What a frame whose solves kept stopping at the iteration cap (`caps`, the frame's
+    /// count) left, and which keys would help, in one line; empty for a solver with no cap.
+    virtual std::string capWarning(const SolverCapCount& caps) const { return {}; }
 };
 
 /// One registered solver: its scene name (`sim.solver`), its label in progress lines and
-/// benchmarks, and its factory.
+/// benchmarks, the parser of its own [sim] keys and its factory.
 struct PressureSolverEntry {
     const char* name;
     const char* label;
-    std::unique_ptr<PressureSolver> (*make)(FluidSimulation& sim);
+    /// Reads the solver's own keys from [sim] (a getter's default where a key is absent);
+    /// throws SceneError on a bad value. The caller finish()es the reader.
+    std::unique_ptr<PressureSolverSettings> (*parseKeys)(const TableReader& sim);
+    /// The solver for `sim`, with the settings its parseKeys returned.
+    std::unique_ptr<PressureSolver> (*make)(FluidSimulation& sim, const PressureSolverSettings& settings);
 };
 
 /// Every registered solver, in the order the scene file lists them.
@@ -65,5 +89,13 @@ const std::vector<PressureSolverEntry>& pressureSolvers();
 std::vector<std::string> pressureSolverNames();
 /// The entry called `name`; throws std::invalid_argument listing the names if none is.
 const PressureSolverEntry& findPressureSolver(const std::string& name);
+/// The entry of `p.pressureSolver`; throws SceneError naming sim.solver's line and the
+/// registered names if there is none.
+const PressureSolverEntry& chosenPressureSolver(const SolverParams& p, const std::string& scenePath);
+/// The chosen solver's settings from its own keys in `p.solverKeys` (its defaults without
+/// any). Every registered solver's keys are read and checked, so that a scene keeps its
+/// keys for one solver while --set picks another; throws SceneError on a bad value or on a
+/// [sim] key that neither the scene parser nor any solver reads.
+std::unique_ptr<PressureSolverSettings> parsePressureSolverKeys(const SolverParams& p, const std::string& scenePath);
 
 } // namespace ferro

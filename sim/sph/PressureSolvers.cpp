@@ -1,18 +1,25 @@
 // The table of pressure solvers: one row per solver (see sim/sph/PressureSolver.hpp).
 #include "sim/sph/PressureSolver.hpp"
 
+#include "sim/core/SceneDocument.hpp"
+#include "sim/scene/SimParams.hpp"
+
 #include <stdexcept>
 
 namespace ferro {
 
-std::unique_ptr<PressureSolver> makeWcsphSolver(FluidSimulation& sim); // sim/sph/WcsphSolver.cpp
-std::unique_ptr<PressureSolver> makeDfsphSolver(FluidSimulation& sim); // sim/sph/DfsphSolver.cpp
+// sim/sph/WcsphSolver.cpp
+std::unique_ptr<PressureSolverSettings> parseWcsphKeys(const TableReader& sim);
+std::unique_ptr<PressureSolver> makeWcsphSolver(FluidSimulation& sim, const PressureSolverSettings& settings);
+// sim/sph/DfsphSolver.cpp
+std::unique_ptr<PressureSolverSettings> parseDfsphKeys(const TableReader& sim);
+std::unique_ptr<PressureSolver> makeDfsphSolver(FluidSimulation& sim, const PressureSolverSettings& settings);
 
 const std::vector<PressureSolverEntry>& pressureSolvers()
 {
     static const std::vector<PressureSolverEntry> table = {
-        {"wcsph", "WCSPH", &makeWcsphSolver},
-        {"dfsph", "DFSPH", &makeDfsphSolver},
+        {"wcsph", "WCSPH", &parseWcsphKeys, &makeWcsphSolver},
+        {"dfsph", "DFSPH", &parseDfsphKeys, &makeDfsphSolver},
     };
     return table;
 }
@@ -32,6 +39,32 @@ const PressureSolverEntry& findPressureSolver(const std::string& name)
         list += (list.empty() ? "" : ", ") + std::string(e.name);
     }
     throw std::invalid_argument("unknown pressure solver '" + name + "' (one of " + list + ")");
+}
+
+const PressureSolverEntry& chosenPressureSolver(const SolverParams& p, const std::string& scenePath)
+{
+    try {
+        return findPressureSolver(p.pressureSolver);
+    } catch (const std::invalid_argument&) {
+        std::string list;
+        for (const std::string& name : pressureSolverNames()) list += (list.empty() ? "\"" : ", \"") + name + "\"";
+        throw SceneError((p.pressureSolverWhere.empty() ? scenePath : p.pressureSolverWhere) +
+                         ": sim.solver: must be one of " + list + " (got \"" + p.pressureSolver + "\")");
+    }
+}
+
+std::unique_ptr<PressureSolverSettings> parsePressureSolverKeys(const SolverParams& p, const std::string& scenePath)
+{
+    const PressureSolverEntry& chosen = chosenPressureSolver(p, scenePath);
+    static const SceneDocument none = SceneDocument::parse("", "(none)");
+    const TableReader reader = (p.solverKeys ? *p.solverKeys : none).section("sim");
+    std::unique_ptr<PressureSolverSettings> settings;
+    for (const PressureSolverEntry& e : pressureSolvers()) {
+        std::unique_ptr<PressureSolverSettings> s = e.parseKeys(reader);
+        if (&e == &chosen) settings = std::move(s);
+    }
+    reader.finish();
+    return settings;
 }
 
 } // namespace ferro

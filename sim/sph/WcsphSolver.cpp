@@ -5,6 +5,7 @@
 #include "sim/sph/PressureSolver.hpp"
 
 #include "sim/core/ParticleLoops.hpp"
+#include "sim/core/SceneDocument.hpp"
 #include "sim/sph/FluidSimulation.hpp"
 
 #include <algorithm>
@@ -19,21 +20,29 @@ namespace {
 /// step moves particles a few hundredths of a spacing, so a search lasts many steps.
 constexpr double kNeighborSkin = 0.2;
 
+/// WCSPH's own [sim] keys (parseWcsphKeys).
+struct WcsphSettings final : PressureSolverSettings {
+    /// sim.sound_speed [m/s]; 0 = ten times the scene's expected flow speed.
+    double soundSpeed = 0.0;
+};
+
 class WcsphSolver final : public PressureSolver {
 public:
-    explicit WcsphSolver(FluidSimulation& sim) : sim_(sim) {}
+    WcsphSolver(FluidSimulation& sim, const WcsphSettings& settings) : sim_(sim), settings_(settings) {}
 
     double neighborSkin() const override { return kNeighborSkin; }
 
     double maxTimeStep(double maxSpeed) const override {
-        return sim_.scene().solver.cfl * sim_.spacing() / (sim_.soundSpeed() + maxSpeed);
+        return sim_.scene().solver.cfl * sim_.spacing() / (soundSpeed() + maxSpeed);
     }
 
     std::string settingsSummary() const override {
         char text[64];
-        std::snprintf(text, sizeof text, "sound speed %.3g m/s", sim_.soundSpeed());
+        std::snprintf(text, sizeof text, "sound speed %.3g m/s", soundSpeed());
         return text;
     }
+
+    std::vector<std::pair<std::string, double>> settingValues() const override { return {{"c", soundSpeed()}}; }
 
     std::string advice() const override {
         // The default sound speed is 10x the flow speed vg of gravity's fall (or the scene's
@@ -43,8 +52,8 @@ public:
         // heap pool at 0.77 mm measured 1.05 % on average). 10 hypot(vg, vm) brings that back
         // to the 0.5 % the default gives under gravity alone. Measured trade:
         // docs/physics/sph-solver.md, "WCSPH under a strong magnet".
-        if (sim_.scene().solver.soundSpeed > 0) return {};
-        const double c = sim_.soundSpeed(), vg = c / 10, vm = sim_.magneticFallSpeed();
+        if (settings_.soundSpeed > 0) return {};
+        const double c = soundSpeed(), vg = c / 10, vm = sim_.magneticFallSpeed();
         if (!(vm > vg)) return {};
         const double v = std::hypot(vg, vm);
         char text[400];
@@ -60,7 +69,7 @@ public:
     void advanceVelocities(double dt) override {
         const size_t n = sim_.size();
         const double rho0 = sim_.restDensity();
-        const double c = sim_.soundSpeed();
+        const double c = soundSpeed();
         const std::vector<Real>& rho = sim_.densities();
         std::vector<Real>& p = sim_.solverPressures();
         // Tait equation of state, negative pressures clamped (no tensile instability at the
@@ -91,14 +100,27 @@ public:
     }
 
 private:
+    /// Ten times the fastest expected flow speed (FluidSimulation::expectedSpeed, at least
+    /// 0.1 m/s) keeps the density error near 1 % (Monaghan), unless sim.sound_speed is set.
+    double soundSpeed() const {
+        return settings_.soundSpeed > 0 ? settings_.soundSpeed : 10 * std::max(sim_.expectedSpeed(), 0.1);
+    }
+
     FluidSimulation& sim_;
+    const WcsphSettings settings_;
     std::vector<Real> pOverRho2_;
 };
 
 } // namespace
 
-std::unique_ptr<PressureSolver> makeWcsphSolver(FluidSimulation& sim) {
-    return std::make_unique<WcsphSolver>(sim);
+std::unique_ptr<PressureSolverSettings> parseWcsphKeys(const TableReader& r) {
+    auto s = std::make_unique<WcsphSettings>();
+    s->soundSpeed = r.nonNegative("sound_speed", s->soundSpeed);
+    return s;
+}
+
+std::unique_ptr<PressureSolver> makeWcsphSolver(FluidSimulation& sim, const PressureSolverSettings& settings) {
+    return std::make_unique<WcsphSolver>(sim, static_cast<const WcsphSettings&>(settings));
 }
 
 } // namespace ferro

@@ -22,6 +22,7 @@
 // measures SPlisHSPlasH from its exported densities, so both codes are held to one measure).
 // Only the steps are timed, not the sampling.
 #include "sim/sph/FluidSimulation.hpp"
+#include "sim/scene/SimSceneFile.hpp"
 
 #include "sim/core/ParticleLoops.hpp"
 
@@ -33,6 +34,7 @@
 #include <cstdio>
 #include <cstdlib>
 #include <cstring>
+#include <stdexcept>
 #include <string>
 
 using namespace ferro;
@@ -55,10 +57,9 @@ SimScene damBreak40k(const std::string& kind, double surfaceTension, const std::
     s.container.min = Vec3d(0, 0, 0);
     s.container.max = Vec3d(0.32 * widen, 0.08 * widen, 0.2);
     s.solver.pressureSolver = kind;
-    s.solver.pressureIteration = iteration == "cg"       ? SolverParams::PressureIteration::ConjugateGradient
-                                 : iteration == "jacobi" ? SolverParams::PressureIteration::Jacobi
-                                                         : SolverParams::PressureIteration::Auto;
-    if (densityError > 0) s.solver.maxDensityError = densityError;
+    std::string keys = "pressure_iteration = \"" + iteration + "\"";
+    if (densityError > 0) keys += "\nmax_density_error = " + formatNumber(densityError);
+    s.solver.solverKeys = solverKeysFromText(keys, "bench dam break");
     return s;
 }
 
@@ -182,12 +183,18 @@ int main(int argc, char** argv) {
         // The scene's derived settings, one parseable line (scripts/bench-peer.sh gives the
         // same ones to SPlisHSPlasH): viscosity is fluid plus artificial, c is WCSPH's sound speed.
         const FluidSimulation probe(damBreak40k("dfsph", 0.0, iteration, densityError, widen));
+        const FluidSimulation wcsph(damBreak40k("wcsph", 0.0, iteration, densityError, widen));
+        auto setting = [](const FluidSimulation& sim, const std::string& name) {
+            for (const auto& [key, value] : sim.pressureSolverSettings())
+                if (key == name) return value;
+            throw std::logic_error("bench-sim: the solver has no setting " + name);
+        };
         const SolverParams& sp = probe.scene().solver;
         std::printf("scene: particles=%zu spacing=%g support=%g rho0=%g nu=%.6g c=%.6g cfl=%g max_dt=%g "
                     "density_tol=%g divergence_tol=%g max_iterations=%d gravity=%g\n\n",
                     probe.size(), probe.spacing(), probe.supportRadius(), probe.restDensity(), probe.viscosity(),
-                    probe.soundSpeed(), sp.cfl, sp.maxDt, sp.maxDensityError, sp.maxDivergenceError, sp.maxIterations,
-                    sp.gravity.norm());
+                    setting(wcsph, "c"), sp.cfl, sp.maxDt, setting(probe, "density_tol"), setting(probe, "divergence_tol"),
+                    int(setting(probe, "max_iterations")), sp.gravity.norm());
     }
     // The last two columns (added after the others, so that column positions stay) are
     // density errors in percent: the solver's own per-step figure and the sampled compression.

@@ -27,7 +27,8 @@
 // Suspects left: the field the law reads half a spacing out where the particles read it at
 // a standoff from the steel, and the akinci2013 tension at a wall (docs/physics/sph-solver.md).
 // Environment: FERRO_CLIMB_CURRENT [A], FERRO_CLIMB_COUNT (particles), FERRO_CLIMB_CHI
-// (susceptibility), FERRO_CLIMB_FORCE (magnetization.force), FERRO_CLIMB_TENSION [N/m];
+// (susceptibility), FERRO_CLIMB_FORCE (magnetization.force), FERRO_CLIMB_TENSION [N/m],
+// FERRO_CLIMB_TENSION_MODEL (fluid.surface_tension_model);
 // FERRO_CLIMB_CSV writes the cells (r, z, rho g z, mu0 (F + Mn^2/2), residual, mu0 Mn^2/2),
 // FERRO_CLIMB_DUMP every particle's (r, z, speed) at the end.
 #include "sim/core/Constants.hpp"
@@ -65,6 +66,8 @@ std::string climbScene(long count, double current) {
     const std::string force = forceEnv ? forceEnv : "body";
     const char* tensionEnv = std::getenv("FERRO_CLIMB_TENSION");
     const std::string tension = tensionEnv ? tensionEnv : "0.025";
+    const char* modelEnv = std::getenv("FERRO_CLIMB_TENSION_MODEL");
+    const std::string model = modelEnv ? modelEnv : "akinci2013";
     return R"([shot]
 fps = 10
 duration = 3.0
@@ -73,6 +76,7 @@ preroll = 0.0
 rest_density = 1200.0
 viscosity = 5e-6
 surface_tension = )" + tension + R"(
+surface_tension_model = ")" + model + R"("
 [[fluid.block]]
 shape = "cylinder"
 center = [0.0, 0.0, 0.0]

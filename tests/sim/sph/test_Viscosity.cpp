@@ -49,7 +49,7 @@ SimScene shearBox(double spacing, int cells, int width, double nu, const std::st
     scene.solver.gravity = Vec3d::Zero();
     scene.solver.artificialViscosity = 0;
     scene.solver.viscosityTolerance = 1e-5;
-    if (solver == "wcsph") scene.solver.soundSpeed = 10;   // incompressible on the viscous time scale
+    if (solver == "wcsph") scene.solver.solverKeys = solverKeysFromText("sound_speed = 10");   // incompressible on the viscous time scale
     scene.solver.minDt = 1e-9;
     return scene;
 }
