@@ -24,8 +24,15 @@
 //     worse: +6.5 Pa at the flank (35 % of 18.4 Pa) and not at rest (4.6 mm/s);
 //   - capillarity alone: with no tension the fluid creeps up onto the frustum's top (10.6 mm)
 //     and the pool's own cells spread over 6.8 Pa (48 %).
+//   - the wall's meniscus (session 6, 8,000 particles): with the coil at 0.005 A (no climb;
+//     the law is then rho g z = const) the akinci2013 fluid dips 0.38 mm at the steel (the
+//     contact-line cell 3.9 Pa below the pool's), a non-wetting meniscus: capillarity pulls
+//     the contact line down, so the excess with the field is, if anything, larger than 4.5 Pa;
+//   - the tension model: with "csf" (FERRO_CLIMB_TENSION_MODEL=csf) the fluid creeps up the
+//     flank onto the frustum's top (10.6 mm) as with no tension at all, and the pool is not
+//     at rest (3.0 mm/s): csf holds no coat on a wall.
 // Suspects left: the field the law reads half a spacing out where the particles read it at
-// a standoff from the steel, and the akinci2013 tension at a wall (docs/physics/sph-solver.md).
+// a standoff from the steel.
 // Environment: FERRO_CLIMB_CURRENT [A], FERRO_CLIMB_COUNT (particles), FERRO_CLIMB_CHI
 // (susceptibility), FERRO_CLIMB_FORCE (magnetization.force), FERRO_CLIMB_TENSION [N/m],
 // FERRO_CLIMB_TENSION_MODEL (fluid.surface_tension_model);
