@@ -25,7 +25,7 @@ ParticleTable frameTable(const FluidSimulation& sim, int frame, const std::strin
 /// takes to continue from it (resume, the pre-roll cache).
 struct FrameState {
     std::vector<Vec3> x, v;   ///< positions [m], velocities [m/s]
-    std::vector<Real> p;      ///< pressures [Pa] (the DFSPH warm start); empty without the column
+    std::vector<Real> p;      ///< pressures [Pa] (the pressure solver's, which DFSPH warm-starts from); empty without the column
     std::vector<Vec3> H, M;   ///< field, magnetization [A/m] (the solve's warm start); empty without
     /// The force's free-surface curve and the time [s] of its last fit (FluidMagnetics::CurveMemory).
     std::optional<DemagnetizationCurve::SurfaceFit> curve;

@@ -87,7 +87,7 @@ public:
         solveDensity(dt);
     }
 
-    void permute(const std::vector<uint32_t>& order) override {
+    void permuteState(const std::vector<uint32_t>& order) override {
         if (kappaV_.size() == order.size()) ferro::permute(kappaV_, order);
     }
 
@@ -363,7 +363,8 @@ void DfsphSolver::solveDensity(double dt) {
     const Real rho0 = Real(sim_.restDensity());
     const Real h2 = Real(dt * dt);
     std::vector<Vec3>& v = sim_.solverVelocities();
-    std::vector<Real>& p = sim_.solverPressures();
+    std::vector<Real>& p = pressure_;
+    p.resize(n, Real(0));
     const std::vector<Real>& rho = sim_.densities();
     const std::vector<Vec3>& a = sim_.accelerations();
     kappa_.resize(n);

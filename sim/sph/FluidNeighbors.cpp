@@ -62,7 +62,6 @@ void FluidSimulation::searchCandidates() {
     permute(id_, order_);
     solver_->permute(order_);
     if (implicitViscosity_) implicitViscosity_->permute(order_);
-    permute(p_, order_);
     if (magnetics_) magnetics_->permute(order_);
     grid_.index(x_, grid_.geometry());
     splitCoordinates(x_, px_, py_, pz_);

@@ -52,9 +52,9 @@ FluidSimulation::FluidSimulation(const SimScene& scene)
     for (size_t i = 0; i < n; ++i) id_[i] = uint32_t(i);
     a_.assign(n, Vec3::Zero());
     rho_.assign(n, Real(rho0_));
-    p_.assign(n, 0);
 
     createPressureSolver();
+    solver_->setPressures(std::vector<Real>(n, Real(0)));
     if (scene_.container.type == ContainerParams::Type::Box && scene_.container.periodicSides) {
         periodic_ = PeriodicDomain::horizontal(scene_.container.min.cast<Real>(), scene_.container.max.cast<Real>());
         // One image of a neighbour at most (PeriodicDomain's contract), with room to spare.
@@ -474,7 +474,7 @@ std::vector<T> byId(const std::vector<T>& data, const std::vector<uint32_t>& id)
 std::vector<Vec3> FluidSimulation::positionsById() const { return byId(x_, id_); }
 std::vector<Vec3> FluidSimulation::velocitiesById() const { return byId(v_, id_); }
 std::vector<Real> FluidSimulation::densitiesById() const { return byId(rho_, id_); }
-std::vector<Real> FluidSimulation::pressuresById() const { return byId(p_, id_); }
+std::vector<Real> FluidSimulation::pressuresById() const { return byId(solver_->pressures(), id_); }
 std::vector<Vec3> FluidSimulation::fieldById() const {
     if (!magnetics_ || magnetics_->field().size() != x_.size()) return std::vector<Vec3>(x_.size(), Vec3::Zero());
     return byId(magnetics_->field(), id_);
@@ -497,8 +497,7 @@ void FluidSimulation::setState(double time, const std::vector<Vec3>& xById, cons
     for (size_t i = 0; i < x_.size(); ++i) id_[i] = uint32_t(i);
     x_ = xById;
     v_ = vById;
-    if (pById.empty()) std::fill(p_.begin(), p_.end(), Real(0));
-    else p_ = pById;
+    solver_->setPressures(pById.empty() ? std::vector<Real>(x_.size(), Real(0)) : pById);
     time_ = time;
     solver_->resetWarmStart();
     if (implicitViscosity_) implicitViscosity_->resetWarmStart();

@@ -159,9 +159,9 @@ public:
     /// Total field H and magnetization M [A/m] as of the last step (zero without magnets).
     std::vector<Vec3> fieldById() const;
     std::vector<Vec3> magnetizationById() const;
-    /// Replaces the state (resume): time, positions, velocities and pressures (the DFSPH
-    /// warm start; may be empty) in id order, and optionally H and M (the magnetization
-    /// solve's warm start; may be empty).
+    /// Replaces the state (resume): time, positions, velocities and pressures (handed to the
+    /// pressure solver, PressureSolver::setPressures; empty = zeros) in id order, and
+    /// optionally H and M (the magnetization solve's warm start; may be empty).
     void setState(double time, const std::vector<Vec3>& xById, const std::vector<Vec3>& vById,
                   const std::vector<Real>& pById, const std::vector<Vec3>& HById = {},
                   const std::vector<Vec3>& MById = {});
@@ -188,7 +188,7 @@ public:
     const PeriodicDomain& periodic() const { return periodic_; }
     const std::vector<Vec3>& velocities() const { return v_; }
     const std::vector<Real>& densities() const { return rho_; }
-    const std::vector<Real>& pressures() const { return p_; }
+    const std::vector<Real>& pressures() const { return solver_->pressures(); }  ///< the pressure solver's [Pa]
     const std::vector<Vec3>& boundaryPositions() const { return bx_; }
 
     // --- For pressure solvers (sim/sph/PressureSolver.hpp): the state they advance and the
@@ -201,7 +201,6 @@ public:
     static constexpr Real kWallMirror = 1;
 
     std::vector<Vec3>& solverVelocities() { return v_; }
-    std::vector<Real>& solverPressures() { return p_; }
     const std::vector<Vec3>& accelerations() const { return a_; }
     const NeighborLists& fluidNeighbors() const { return fluidNbr_; }
     const NeighborLists& boundaryNeighbors() const { return boundaryNbr_; }
@@ -324,7 +323,7 @@ private:
 
     // Fluid particles, sorted by (cell, id).
     std::vector<Vec3> x_, v_, a_, xOld_;
-    std::vector<Real> rho_, p_;
+    std::vector<Real> rho_;
     std::vector<Vec3> colorGradient_;         // grad c (fluid and walls), for the magnetics, on demand
     std::vector<Real> exposure_;              // exposure of the surface (1 = open), with colorGradient_
     std::vector<uint32_t> id_;

@@ -52,8 +52,18 @@ public:
     /// velocities (the caller then moves the particles) and sets each particle's pressure.
     /// Fills the solver fields of the simulation's StepStats.
     virtual void advanceVelocities(double dt) = 0;
-    /// Per-particle solver state follows the particles' re-sort (new index k = old order[k]).
-    virtual void permute(const std::vector<uint32_t>& order) {}
+    /// The pressure of each particle [Pa], sorted order: what the last step solved (zeros
+    /// before the first). Every solver sets it; the frame files carry it.
+    const std::vector<Real>& pressures() const { return pressure_; }
+    /// Sets the pressures (a resumed run's, from a frame file's `pressure` column; zeros for
+    /// a new one), in the particles' current order: a solver that warm-starts from them
+    /// (DFSPH) then continues exactly as an uninterrupted run.
+    void setPressures(std::vector<Real> p) { pressure_ = std::move(p); }
+    /// The pressures and the solver's own per-particle state follow the particles' re-sort
+    /// (new index k = old order[k]).
+    void permute(const std::vector<uint32_t>& order);
+    /// The solver's own per-particle state follows the re-sort (permute calls it).
+    virtual void permuteState(const std::vector<uint32_t>& order) {}
     /// Forgets any warm start: called at every frame start and on setState, so that a
     /// run resumed from a frame file continues exactly like an uninterrupted one.
     virtual void resetWarmStart() {}
@@ -69,6 +79,9 @@ public:
     /// What a frame whose solves kept stopping at the iteration cap (`caps`, the frame's
     /// count) left, and which keys would help, in one line; empty for a solver with no cap.
     virtual std::string capWarning(const SolverCapCount& caps) const { return {}; }
+
+protected:
+    std::vector<Real> pressure_;   ///< pressures(): the solver writes them each step
 };
 
 /// One registered solver: its scene name (`sim.solver`), its label in progress lines and

@@ -1,6 +1,7 @@
 // The table of pressure solvers: one row per solver (see sim/sph/PressureSolver.hpp).
 #include "sim/sph/PressureSolver.hpp"
 
+#include "sim/core/ParticleLoops.hpp"
 #include "sim/core/SceneDocument.hpp"
 #include "sim/scene/SimParams.hpp"
 
@@ -14,6 +15,12 @@ std::unique_ptr<PressureSolver> makeWcsphSolver(FluidSimulation& sim, const Pres
 // sim/sph/DfsphSolver.cpp
 std::unique_ptr<PressureSolverSettings> parseDfsphKeys(const TableReader& sim);
 std::unique_ptr<PressureSolver> makeDfsphSolver(FluidSimulation& sim, const PressureSolverSettings& settings);
+
+void PressureSolver::permute(const std::vector<uint32_t>& order)
+{
+    if (pressure_.size() == order.size()) ferro::permute(pressure_, order);
+    permuteState(order);
+}
 
 const std::vector<PressureSolverEntry>& pressureSolvers()
 {

@@ -71,7 +71,8 @@ public:
         const double rho0 = sim_.restDensity();
         const double c = soundSpeed();
         const std::vector<Real>& rho = sim_.densities();
-        std::vector<Real>& p = sim_.solverPressures();
+        std::vector<Real>& p = pressure_;
+        p.resize(n);
         // Tait equation of state, negative pressures clamped (no tensile instability at the
         // free surface).
         const double B = rho0 * c * c / 7;
