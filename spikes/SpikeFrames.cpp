@@ -23,7 +23,6 @@
 #include <exception>
 #include <filesystem>
 #include <fstream>
-#include <functional>
 #include <memory>
 #include <iostream>
 #include <map>
@@ -155,8 +154,8 @@ void addMagnetHistory(const SpikeScene& scene, double time, SpikeInput& in)
 // scene's magnetization.smoothing (the simulator's model, sim/particlefield/DipoleTree.hpp),
 // summed by a tree (opening angle 0.6), with the periodic copies of a box with periodic sides
 // (fluid.period).
-std::function<Vec3d(const Vec3d&)> particleFieldOf(const ParticleTable& particles, const std::vector<Vec3>& x,
-                                                   const std::vector<Vec3>& M, double spacing, const SpikeFluid& fluid)
+std::shared_ptr<const ParticleFieldEvaluator> particleFieldOf(const ParticleTable& particles, const std::vector<Vec3>& x,
+                                                              const std::vector<Vec3>& M, double spacing, const SpikeFluid& fluid)
 {
     const double restDensity = fluid.density, smoothing = fluid.law.smoothing;
     const int rho = particles.column("density");
@@ -170,7 +169,7 @@ std::function<Vec3d(const Vec3d&)> particleFieldOf(const ParticleTable& particle
     auto evaluator = std::make_shared<ParticleFieldEvaluator>();
     evaluator->setPeriodic(fluid.period[0], fluid.period[1]);
     evaluator->build(x, volume, M, 0.6, smoothing);
-    return [evaluator](const Vec3d& p) { return evaluator->inducedField(p); };
+    return evaluator;
 }
 
 // The x, y, z columns of a particle table read from `path`, every one finite. Throws
@@ -326,20 +325,18 @@ namespace {
 // nearest a time, read once (positions only); null where the file does not exist (before the
 // shot, a range simulated only in part). A file that exists but cannot be read is an error
 // (SpikeInputError naming it).
-std::function<std::shared_ptr<const std::vector<Vec3d>>(double)> pastParticleReader(const std::string& pattern,
-                                                                                  double fps)
-{
-    using Positions = std::shared_ptr<const std::vector<Vec3d>>;
-    auto cache = std::make_shared<std::map<int, Positions>>();
-    auto lock = std::make_shared<std::mutex>();
-    return [pattern, fps, cache, lock](double time) -> Positions {
-        if (!(fps > 0) || !std::isfinite(time)) return nullptr;
-        const int frame = std::max(0, int(std::lround(time * fps)));
-        std::lock_guard<std::mutex> guard(*lock);
-        const auto found = cache->find(frame);
-        if (found != cache->end()) return found->second;
-        Positions result;
-        const std::string path = framePath(pattern, frame);
+class ShotParticleHistory final : public ParticleHistory {
+public:
+    ShotParticleHistory(std::string pattern, double fps) : pattern_(std::move(pattern)), fps_(fps) {}
+
+    std::shared_ptr<const std::vector<Vec3d>> positionsAt(double time) const override {
+        if (!(fps_ > 0) || !std::isfinite(time)) return nullptr;
+        const int frame = std::max(0, int(std::lround(time * fps_)));
+        std::lock_guard<std::mutex> guard(lock_);
+        const auto found = cache_.find(frame);
+        if (found != cache_.end()) return found->second;
+        std::shared_ptr<const std::vector<Vec3d>> result;
+        const std::string path = framePath(pattern_, frame);
         if (std::filesystem::exists(path)) {
             ParticleTable table;
             try {
@@ -353,10 +350,16 @@ std::function<std::shared_ptr<const std::vector<Vec3d>>(double)> pastParticleRea
             for (const Vec3& p : x) positions->push_back(p.cast<double>());
             result = std::move(positions);
         }
-        (*cache)[frame] = result;
+        cache_[frame] = result;
         return result;
-    };
-}
+    }
+
+private:
+    std::string pattern_;
+    double fps_;
+    mutable std::mutex lock_;
+    mutable std::map<int, std::shared_ptr<const std::vector<Vec3d>>> cache_;
+};
 
 } // namespace
 
@@ -365,7 +368,7 @@ SpikeResult spikeFrame(const SpikeScene& scene, const std::string& surfacePath, 
 {
     refuseToOverwriteInputs("--out", outPath, {surfacePath, particlePath});
     SpikeInput in = loadSpikeInput(scene, surfacePath, particlePath, frameHint);
-    if (!historyPattern.empty()) in.pastParticles = pastParticleReader(historyPattern, scene.fps);
+    if (!historyPattern.empty()) in.pastParticles = std::make_shared<ShotParticleHistory>(historyPattern, scene.fps);
     if (scene.params.responseTime > 0 && !historyPattern.empty()) {
         // The frame's number: the range's, else the frame's time (header) at the shot's rate.
         const int frame = frameHint >= 0 ? frameHint : int(std::lround(in.time * scene.fps));

@@ -478,8 +478,7 @@ TriangleMesh earlierSpikySurface(const TriangleMesh& surface, const EarlierLatti
 Vec3d totalFieldAt(const SpikeInput& input, const Vec3d& x)
 {
     Vec3d H = magnetField(input.magnets, x);
-    if (input.particleField) H += input.particleField(x);
-    if (input.solidField) H += input.solidField(x);
+    H += particleFieldAt(input, x) + solidFieldAt(input, x);
     return H;
 }
 

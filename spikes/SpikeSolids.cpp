@@ -1,6 +1,8 @@
 // The solids of a spike frame (SpikeSolids.hpp).
 #include "spikes/SpikeSolids.hpp"
 
+#include "sim/particlefield/ParticleField.hpp"
+
 #include "sim/core/StageErrors.hpp"
 #include "sim/geometry/Container.hpp"
 #include "sim/solids/SurfaceChargeSolver.hpp"
@@ -26,25 +28,30 @@ void addSolids(const std::vector<SolidParams>& solids, double spacing, const std
     auto solver = std::make_shared<SurfaceChargeSolver>();
     solver->setSurfaces(surfaces);
     const std::vector<Magnet> magnets = in.magnets;
-    const std::function<Vec3d(const Vec3d&)> particles = in.particleField;
-    const SurfaceChargeSolver::Stats st = solver->solve([&](const Vec3d& p) {
-        Vec3d h = magnetField(magnets, p);
-        if (particles) h += particles(p);
-        return h;
-    });
+    const SurfaceChargeSolver::Stats st =
+        solver->solve([&](const Vec3d& p) { return magnetField(magnets, p) + particleFieldAt(in, p); });
     if (!st.converged)
         throw BadInputError(where + ": the solids' magnetization did not converge (residual " +
                             std::to_string(st.residual) + " after " + std::to_string(st.iterations) + " steps)");
     for (double q : solver->charge())
         if (!std::isfinite(q)) throw BadInputError(where + ": the solids' magnetization is not finite");
+    in.solids = solver;
+}
+
+Vec3d particleFieldAt(const SpikeInput& in, const Vec3d& x)
+{
+    return in.particleField ? in.particleField->inducedField(x) : Vec3d::Zero();
+}
+
+Vec3d solidFieldAt(const SpikeInput& in, const Vec3d& x)
+{
+    if (!in.solids) return Vec3d::Zero();
     // The particles' path (one float pass, 0.2-0.3 % on the sphere): the spikes ask for the
     // field at every vertex of the refined surface.
-    in.solidField = [solver](const Vec3d& x) {
-        Vec3d H;
-        Mat3d J;
-        solver->fieldAndGradient(x, H, J);
-        return H;
-    };
+    Vec3d H;
+    Mat3d J;
+    in.solids->fieldAndGradient(x, H, J);
+    return H;
 }
 
 } // namespace ferro

@@ -11,7 +11,7 @@
 namespace ferro {
 
 /// Poses `solids` at in.time and fills in.fluid.solids (their surfaces as obstacles) and
-/// in.solidField: the surface charge (SurfaceChargeSolver) solved cold in the field of
+/// in.solids: the surface charge (SurfaceChargeSolver) solved cold in the field of
 /// in.magnets plus in.particleField, as ferro-sim's step solves it (panels of each solid's
 /// panel_size, else twice `spacing` [m]), and the field that charge makes at a point outside
 /// every solid [A/m]. Nothing when `solids` is empty. Throws SceneError (naming `where`) for a

@@ -11,11 +11,13 @@
 #include "spikes/SpikePhysics.hpp"
 #include "sim/core/TriangleMesh.hpp"
 
-#include <functional>
 #include <memory>
 #include <vector>
 
 namespace ferro {
+
+class ParticleFieldEvaluator; // sim/particlefield/ParticleField.hpp
+class SurfaceChargeSolver;    // sim/solids/SurfaceChargeSolver.hpp
 
 class SurfaceFlowHistory;
 
@@ -44,17 +46,28 @@ struct SpikeParticles {
     double spacing = 0.0;              ///< particle spacing [m]
 };
 
+/// The fluid's particles at earlier frames (spikes/SpikeFrames.cpp reads them from a shot's
+/// particle files).
+class ParticleHistory {
+public:
+    virtual ~ParticleHistory() = default;
+    /// The particles' positions [m] at `time` [s]: those of the frame nearest it, or null
+    /// when there is none. Throws SpikeInputError when that frame's file cannot be read.
+    virtual std::shared_ptr<const std::vector<Vec3d>> positionsAt(double time) const = 0;
+};
+
 struct SpikeInput {
     double time = 0;                    ///< the frame's time [s]
     TriangleMesh surface;               ///< closed fluid surface, outward triangles
     std::vector<Magnet> magnets;        ///< the magnets at the frame's time
     SpikeFluid fluid;
     SpikeParticles particles;
-    /// Field of the magnetized particles at a point [A/m] (null = magnets only).
-    std::function<Vec3d(const Vec3d&)> particleField;
-    /// Field of the magnetized solids ([[solids]]) at a point outside them [A/m], solved in
-    /// the magnets' and the particles' field (null = no solids).
-    std::function<Vec3d(const Vec3d&)> solidField;
+    /// The magnetized particles' field: a tree of their smoothed dipoles, as the simulator's
+    /// (null = magnets only; particleFieldAt).
+    std::shared_ptr<const ParticleFieldEvaluator> particleField;
+    /// The magnetized solids ([[solids]]): their surface charge, solved in the magnets' and
+    /// the particles' field (null = no solids; solidFieldAt).
+    std::shared_ptr<const SurfaceChargeSolver> solids;
     /// The magnets' recent past for SpikeParams::growthTime, from the scene's tracks:
     /// pastMagnets[k] at k steps back (k = 0: now, by the tracks, the reference the past is
     /// compared with, so header magnets softened differently never make a still field lag),
@@ -69,12 +82,15 @@ struct SpikeInput {
     /// The fluid's flow over earlier frames, for SpikeParams::responseTime (SurfaceFlow.hpp):
     /// the tips are carried by it. Null = the tips stand where the field lays them out.
     std::shared_ptr<const SurfaceFlowHistory> flow;
-    /// The particles' positions [m] at an earlier time [s] (the particle file of the frame
-    /// nearest it; null when there is none; SpikeInputError when it cannot be read), for
-    /// SurfaceFields::fieldHistoryPeak: where the surface stood when the field was strongest.
-    /// Null = unknown.
-    std::function<std::shared_ptr<const std::vector<Vec3d>>(double)> pastParticles;
+    /// The particles at earlier times, for SurfaceFields::fieldHistoryPeak: where the surface
+    /// stood when the field was strongest. Null = unknown.
+    std::shared_ptr<const ParticleHistory> pastParticles;
 };
+
+/// The particles' field at x [A/m]; zero without SpikeInput::particleField.
+Vec3d particleFieldAt(const SpikeInput& in, const Vec3d& x);
+/// The solids' field at x [A/m], outside them; zero without SpikeInput::solids.
+Vec3d solidFieldAt(const SpikeInput& in, const Vec3d& x);
 
 /// One hexagonal pattern (one magnet).
 struct SpikePattern {

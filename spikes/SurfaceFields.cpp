@@ -38,8 +38,8 @@ SurfaceFields::SurfaceFields(const SpikeInput& in, const SpikeParams& p, double 
 Vec3d SurfaceFields::field(const Vec3d& x, const Vec3d& n) const
 {
     Vec3d H = magnetField(in_.magnets, x);
-    if (in_.particleField) H += in_.particleField(x + 2.0 * spacing_ * n);
-    if (in_.solidField) H += in_.solidField(x);
+    if (in_.particleField) H += particleFieldAt(in_, x + 2.0 * spacing_ * n);
+    if (in_.solids) H += solidFieldAt(in_, x);
     return H;
 }
 
@@ -169,7 +169,7 @@ double SurfaceFields::fieldHistoryPeak(const Vec3d& x, const Vec3d& n, const Vec
     }
     if (strongest > 0 && in_.pastParticles && spacing_ > 0 && !in_.particles.positions.empty()) {
         // Where the surface stood at the peak: x moved by the fluid's height change since.
-        const auto then = in_.pastParticles(in_.time - double(strongest) * in_.lookbackStep);
+        const auto then = in_.pastParticles->positionsAt(in_.time - double(strongest) * in_.lookbackStep);
         if (then && !then->empty()) {
             const double radius = 1.5 * spacing_;
             const double hNow = heightAlong(in_.particles.positions, x, n, radius, spacing_);

@@ -82,7 +82,7 @@ TEST_CASE("spikes on a steel cylinder's coat: both faces along the field, at the
 {
     const SpikeScene sc = coatScene();
     const SpikeInput in = coatInput(sc, 0.0, 1);
-    REQUIRE(in.solidField);
+    REQUIRE(in.solids != nullptr);
     REQUIRE(in.fluid.solids);
     // The steel gathers the field on the faces along it: at the coat's +x face, 1 + (a/r)^2 of
     // H0 for an infinitely long and permeable cylinder (1.59 here); the finite one's middle
