@@ -30,13 +30,22 @@ constexpr double kDensityWarmStart = 0.8;
 /// gradients once its own rate of progress (over the last kRateWindow sweeps, judged from
 /// sweep kFirstJudgement on) says it would not reach the tolerance within the iteration cap.
 /// CG needs about as many iterations as the layer is deep in particles, Jacobi about the
-/// square of that; but CG stops with the smooth part of the pressure less settled (a
-/// resting tank's bottom pressure 30 % low where CG took over at a budget of 40 sweeps), and
-/// its set of pressured particles costs it more than Jacobi on shallow layers. So only the
-/// steps Jacobi would leave at its cap go to CG. Measurements: docs/physics/sph-solver.md,
-/// "Choosing the density iteration".
+/// square of that; but on shallow layers Jacobi's sweeps are cheaper (CG holds a tighter
+/// tolerance, kCgTolerance, and costs more a sweep). So only the steps Jacobi would leave at
+/// its cap go to CG. Measurements: docs/physics/sph-solver.md, "Choosing the density
+/// iteration".
 constexpr int kFirstJudgement = 6;
 constexpr int kRateWindow = 3;
+
+/// Conjugate gradients stop at this fraction of sim.max_density_error. A stop on the residual
+/// cannot see a smooth error of the pressure (a near-uniform excess or deficit over the
+/// layer changes the density by the system's smallest eigenvalue, about 1/depth^2 of a local
+/// error). Jacobi's sweeps hardly change that mode within a step, so their warm start carries
+/// it steadily; CG changes it freely within the tolerance, differently each step, and the
+/// fluid answers the flicker with motion (a resting tank's pressure total swung 300-5,900
+/// with a four-step period at 1.0; within 0.7 % a step at 0.1). Measurements:
+/// docs/physics/sph-solver.md, "Why CG leaves a pool less at rest".
+constexpr double kCgTolerance = 0.1;
 
 /// DFSPH's own [sim] keys (parseDfsphKeys).
 struct DfsphSettings final : PressureSolverSettings {
@@ -54,9 +63,9 @@ struct DfsphSettings final : PressureSolverSettings {
     /// compresses. Auto: each step starts with Jacobi and hands over to conjugate gradients when
     /// Jacobi's own rate of progress says it would not reach the tolerance within
     /// max_iterations (deep layers: Jacobi's sweeps grow with the square of the depth in
-    /// particles, CG's with the depth); not the default, because the steps CG solves leave a
-    /// pool over a magnet less at rest. CG: conjugate gradients from the start on the same
-    /// (symmetric) system, then Jacobi sweeps to the tolerance. Measurements:
+    /// particles, CG's with the depth); not yet the default (it waits for a whole suite run
+    /// with it). CG: bound-constrained conjugate gradients (MPRGP) from the start on the same
+    /// (symmetric) system to a tenth of the tolerance, then Jacobi sweeps to it. Measurements:
     /// docs/physics/sph-solver.md, "Choosing the density iteration".
     enum class Iteration { Jacobi, Auto, ConjugateGradient };
     Iteration iteration = Iteration::Jacobi;
@@ -124,8 +133,13 @@ private:
     /// its rate of progress predicts that maxIterations would not do.
     int relaxedJacobi(std::vector<Real>& kappa, const std::vector<Real>& source, double hPow, double eta,
                       int minIterations, bool densitySolve, int maxIterations, bool* handOver = nullptr);
+    /// The density solve by bound-constrained conjugate gradients (MPRGP) until the mean of
+    /// hPow |projected gradient| is under eta, or maxIterations products.
     int conjugateGradient(std::vector<Real>& kappa, const std::vector<Real>& source, double hPow, double eta,
                           int maxIterations);
+    /// out = M u (the density solve's matrix, M = D G: minus the density change per unit hPow
+    /// that the pressure accelerations of u cause), every particle.
+    void applySystem(const std::vector<Real>& u, std::vector<Real>& out);
     uint32_t neighborCount(size_t i) const {
         return sim_.fluidNeighbors().count[i] + sim_.boundaryNeighbors().count[i];
     }
@@ -135,7 +149,6 @@ private:
     std::vector<Real> alpha_, kappa_, kappaV_, source_, residual_;
     std::vector<Real> change_;  // the density change of a field, per particle (FluidSimulation::divergence)
     std::vector<Real> cgResidual_, cgPreconditioned_, cgDirection_, cgProduct_; // conjugateGradient's vectors
-    std::vector<uint8_t> cgInSet_;  // conjugateGradient: 1 where a particle may carry pressure (the set S)
 };
 
 void DfsphSolver::computeFactors() {
@@ -235,102 +248,118 @@ int DfsphSolver::relaxedJacobi(std::vector<Real>& kappa, const std::vector<Real>
     return it;
 }
 
+void DfsphSolver::applySystem(const std::vector<Real>& u, std::vector<Real>& out) {
+    sim_.pressureAccelerations(u);
+    sim_.pressureDivergence(out);
+    forEachParticle(sim_.size(), [&](size_t i) { out[i] = -out[i]; });
+}
+
 int DfsphSolver::conjugateGradient(std::vector<Real>& kappa, const std::vector<Real>& source, double hPow, double eta,
                                    int maxIterations) {
-    // The density solve's system is M kappa = b with M = D G, b = -source / hPow: G kappa the
-    // pressure accelerations (pressureAccelerations: a = -G kappa), D the density change of a
-    // velocity field (divergence). D is G's adjoint, sum_i k_i (D u)_i = sum_i u_i . (G k)_i,
-    // walls included (they push with kappa_i alone), so M is symmetric positive
-    // semi-definite: preconditioned conjugate gradients apply, with alpha (1 / M_ii) as
-    // preconditioner. Jacobi's sweeps grow with the square of the fluid's depth in
-    // spacings, CG's with the depth. The inequality kappa >= 0 is not CG's: the set S of
-    // particles that may carry pressure is every particle of the dense interior and the
-    // sparse (free-surface) ones the step compresses; a second round drops from S the
-    // particles the first left under tension and solves again from there (taking back in
-    // the particles left out that the step then compresses made a dam break's solve churn:
-    // 100 sweeps, 0.096 % left); negative values are then clamped, and the caller's
-    // Jacobi sweeps finish the complementarity problem. Dot products in fixed order
-    // (deterministicSum): resumed runs stay exact.
+    // The density solve as what it is, a bound-constrained quadratic program: minimize
+    // q(k) = k.M k / 2 - b.k subject to k >= 0 (b = -source / hPow), whose optimality conditions
+    // are the complementarity problem the Jacobi sweeps solve: g = M k - b >= 0 where k = 0 (no
+    // compression left without pressure), g = 0 where k > 0. MPRGP (Dostal & Schoberl 2005,
+    // "Minimizing quadratic functions subject to bound constraints with the rate of convergence
+    // and finite termination", Comput. Optim. Appl. 30): conjugate gradients on the face of
+    // the particles that carry pressure, preconditioned by alpha (1 / M_ii) as the unbounded CG;
+    // a step that would take a pressure below zero stops at the bound and leaves the face by a
+    // projected relaxed Jacobi step (the "expansion"); when the face's gradient is small
+    // against the pull of particles outside it that the step compresses ("proportioning"),
+    // a step along that pull lets them in. Each iteration is one product M p (two on an
+    // expansion). Dot products in fixed order (deterministicSum): resumed runs stay exact.
     const size_t n = sim_.size();
     const Real hp = Real(hPow);
-    std::vector<Real>& R = cgResidual_;        // b - M kappa, every particle
-    std::vector<Real>& Z = cgPreconditioned_;  // alpha R on S
-    std::vector<Real>& P = cgDirection_;
-    std::vector<Real>& Q = cgProduct_;         // M P
-    std::vector<uint8_t>& inS = cgInSet_;
-    R.resize(n);
-    Z.resize(n);
-    P.resize(n);
-    Q.resize(n);
-    inS.resize(n);
-    forEachParticle(n, [&](size_t i) {
-        inS[i] = source[i] < 0 || neighborCount(i) >= kDenseNeighborhood;
-        if (!inS[i]) kappa[i] = 0;
-    });
-    // The compression the step would leave on S: hPow R_i where positive, summed over CG's own
-    // unknowns and divided by every particle (the Jacobi sweeps' mean, restricted to S). A
-    // particle outside S (sparse, not compressed by the step itself) may still be compressed by
-    // its neighbours' pressure, which no kappa in S undoes:
-    // counting those kept CG at its cap on shallow layers (40,960 particles 8 deep, every step
-    // of 5 frames, 0.33 % falling to 0.11 % left). The caller's Jacobi sweeps, over every
-    // particle, finish them.
+    constexpr double kGamma = 1.0;         // proportioning threshold (Dostal's Gamma)
+    constexpr Real kExpansion = Real(0.5); // the expansion's relaxed Jacobi weight (SPlisHSPlasH's)
+    std::vector<Real>& g = cgResidual_;    // M k - b
+    std::vector<Real>& z = cgPreconditioned_;
+    std::vector<Real>& p = cgDirection_;
+    std::vector<Real>& Ap = cgProduct_;
+    g.resize(n);
+    z.resize(n);
+    p.resize(n);
+    Ap.resize(n);
+    auto gradient = [&]() {   // g = M k - b: one product
+        applySystem(kappa, Ap);
+        forEachParticle(n, [&](size_t i) { g[i] = Ap[i] + source[i] / hp; });
+    };
+    // Free gradient phi (on the face k > 0) and chopped gradient beta (at the bound, pulling in).
+    auto phi = [&](size_t i) { return kappa[i] > 0 ? g[i] : Real(0); };
+    auto beta = [&](size_t i) { return kappa[i] > 0 ? Real(0) : std::min(g[i], Real(0)); };
+    // The stopping measure: the mean of hPow |projected gradient|, the compression left
+    // without pressure (the Jacobi sweeps' measure) plus the pressure where the fluid has
+    // no compression to hold (which the sweeps, rising from below, never leave; CG, which
+    // may overshoot, must be held to it: counting compression alone left a resting tank's
+    // bottom pressure 16 % high).
     auto error = [&]() {
-        return deterministicSum(n, [&](size_t i) { return inS[i] ? std::max(double(hp * R[i]), 0.0) : 0.0; }) /
+        return deterministicSum(n, [&](size_t i) { return std::abs(double(hp * (phi(i) + beta(i)))); }) /
                double(std::max<size_t>(n, 1));
     };
-    auto dotOnS = [&](const std::vector<Real>& x, const std::vector<Real>& y) {
-        return deterministicSum(n, [&](size_t i) { return inS[i] ? double(x[i]) * double(y[i]) : 0.0; });
+    auto dot = [&](const std::vector<Real>& x, const std::vector<Real>& y) {
+        return deterministicSum(n, [&](size_t i) { return double(x[i]) * double(y[i]); });
     };
-    int it = 0;
-    constexpr int kRounds = 2;
-    for (int round = 0; round < kRounds && it < maxIterations; ++round) {
-        if (round > 0) {
-            // Particles the first round left under tension leave S.
-            const double leaving = deterministicSum(n, [&](size_t i) { return inS[i] && kappa[i] < 0 ? 1.0 : 0.0; });
-            if (leaving == 0) break;
-            forEachParticle(n, [&](size_t i) {
-                if (inS[i] && kappa[i] < 0) {
-                    inS[i] = 0;
-                    kappa[i] = 0;
-                }
-            });
-        }
-        // The residual costs a sweep like an iteration's, and is counted as one.
-        ++it;
-        sim_.pressureAccelerations(kappa);
-        sim_.pressureDivergence(change_);
-        forEachParticle(n, [&](size_t i) {
-            R[i] = -source[i] / hp + change_[i];
-            Z[i] = inS[i] ? alpha_[i] * R[i] : 0;
-            P[i] = Z[i];
-        });
-        double rz = dotOnS(R, Z);
-        double err = error();
-        // The first round gets a quarter of the sweeps: where it leaves tension (a poured
-        // lattice's floor layer starts 8 % below rest density) it is not converging to
-        // anything the second round keeps.
-        const int roundEnd = round == 0 ? std::max(1, maxIterations / 4) : maxIterations;
-        while (it < roundEnd && err > eta && rz > 0) {
-            sim_.pressureAccelerations(P);
-            sim_.pressureDivergence(Q);
-            forEachParticle(n, [&](size_t i) { Q[i] = -Q[i]; });
-            const double pq = dotOnS(P, Q);
-            if (!(pq > 0)) break;
-            const Real step = Real(rz / pq);
-            forEachParticle(n, [&](size_t i) {
-                if (inS[i]) kappa[i] += step * P[i];
-                R[i] -= step * Q[i];
-                Z[i] = inS[i] ? alpha_[i] * R[i] : 0;
-            });
-            ++it;
-            err = error();
-            const double rzNext = dotOnS(R, Z);
-            const Real beta = Real(rzNext / rz);
-            rz = rzNext;
-            forEachParticle(n, [&](size_t i) { P[i] = inS[i] ? Z[i] + beta * P[i] : 0; });
-        }
-    }
     forEachParticle(n, [&](size_t i) { kappa[i] = std::max(kappa[i], Real(0)); });
+    int it = 1;
+    gradient();
+    auto restart = [&]() {
+        forEachParticle(n, [&](size_t i) {
+            z[i] = alpha_[i] * phi(i);
+            p[i] = z[i];
+        });
+    };
+    restart();
+    double err = error();
+    while (it < maxIterations && err > eta) {
+        const double betaNorm2 = deterministicSum(n, [&](size_t i) { return double(beta(i)) * double(beta(i)) * alpha_[i]; });
+        const double phiZ = deterministicSum(n, [&](size_t i) { return double(phi(i)) * double(z[i]); });
+        if (betaNorm2 <= kGamma * kGamma * phiZ) {
+            applySystem(p, Ap);
+            ++it;
+            const double pAp = dot(p, Ap);
+            if (!(pAp > 0)) break;
+            const double stepCg = dot(g, p) / pAp;
+            // The longest step that keeps k >= 0 (k - step p).
+            double stepMax = 1e300;
+            for (size_t i = 0; i < n; ++i)
+                if (p[i] > 0) stepMax = std::min(stepMax, double(kappa[i]) / double(p[i]));
+            if (stepCg <= stepMax) {
+                const Real a = Real(stepCg);
+                forEachParticle(n, [&](size_t i) {
+                    kappa[i] = std::max(kappa[i] - a * p[i], Real(0));
+                    g[i] -= a * Ap[i];
+                    z[i] = alpha_[i] * phi(i);
+                });
+                const Real gamma = Real(dot(z, Ap) / pAp);
+                forEachParticle(n, [&](size_t i) { p[i] = z[i] - gamma * p[i]; });
+            } else {
+                // Expansion: to the bound, then a projected relaxed Jacobi step off the face.
+                const Real a = Real(stepMax);
+                forEachParticle(n, [&](size_t i) {
+                    kappa[i] = std::max(kappa[i] - a * p[i], Real(0));
+                    g[i] -= a * Ap[i];
+                });
+                forEachParticle(n, [&](size_t i) { kappa[i] = std::max(kappa[i] - kExpansion * alpha_[i] * g[i], Real(0)); });
+                gradient();
+                ++it;
+                restart();
+            }
+        } else {
+            // Proportioning: along the chopped gradient, letting compressed particles carry pressure.
+            forEachParticle(n, [&](size_t i) { z[i] = alpha_[i] * beta(i); });
+            applySystem(z, Ap);
+            ++it;
+            const double dAd = dot(z, Ap);
+            if (!(dAd > 0)) break;
+            const Real a = Real(dot(g, z) / dAd);
+            forEachParticle(n, [&](size_t i) {
+                kappa[i] = std::max(kappa[i] - a * z[i], Real(0));
+                g[i] -= a * Ap[i];
+            });
+            restart();
+        }
+        err = error();
+    }
     return it;
 }
 
@@ -395,13 +424,14 @@ void DfsphSolver::solveDensity(double dt) {
     const DfsphSettings& sp = settings_;
     using Iteration = DfsphSettings::Iteration;
     // Auto: Jacobi first, then CG from where Jacobi stopped if its progress is too slow.
-    // Whatever CG leaves (its set of pressured particles is fixed, kappa >= 0 is clamped
-    // after) Jacobi sweeps finish, as after "cg".
+    // Jacobi sweeps finish after CG (to the tolerance, usually none: CG stops at a tenth of it).
     int jacobi = 0;
     bool useCg = sp.iteration == Iteration::ConjugateGradient;
     if (sp.iteration == Iteration::Auto)
         jacobi = relaxedJacobi(kappa_, source_, dt * dt, sp.maxDensityError, 2, true, sp.maxIterations - 1, &useCg);
-    const int cg = useCg ? conjugateGradient(kappa_, source_, dt * dt, sp.maxDensityError, sp.maxIterations - 1 - jacobi) : 0;
+    const int cg = useCg ? conjugateGradient(kappa_, source_, dt * dt, kCgTolerance * sp.maxDensityError,
+                                             sp.maxIterations - 1 - jacobi)
+                         : 0;
     const int finish = (jacobi > 0 && !useCg) ? 0
                        : relaxedJacobi(kappa_, source_, dt * dt, sp.maxDensityError, useCg ? 1 : 2, true,
                                        sp.maxIterations - jacobi - cg);
