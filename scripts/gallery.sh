@@ -63,6 +63,7 @@ plan() {
                          note="camera on its tank" ;;
     magnet_slide)        frame=30; sets=(fluid.block.0.count=$DISH "$PREROLL"); note="$dish particles (scene: 40,960), pre-roll 0.3 s (scene: 2 s)" ;;
     million_dish)        frame=36; sets=(fluid.block.0.count=$DISH); note="$dish particles (scene: 1,000,000)" ;;
+    helix_climb)         frame=29; note="as the scene, the coil just at 2 A" ;;
     morpho_tower)        frame=48; sets=(fluid.block.0.count=5120); note="5,120 particles (scene: 20,480), the coil held at 2.5 A" ;;
     paper_fig10_release) frame=30; sets=(fluid.block.0.count=$DISH)
                          note="$dish particles (scene: 40,960); the heap before the release, no spikes at this count" ;;
