@@ -288,10 +288,8 @@ int DfsphSolver::conjugateGradient(std::vector<Real>& kappa, const std::vector<R
     auto phi = [&](size_t i) { return kappa[i] > 0 ? g[i] : Real(0); };
     auto beta = [&](size_t i) { return kappa[i] > 0 ? Real(0) : std::min(g[i], Real(0)); };
     // The stopping measure: the mean of hPow |projected gradient|, the compression left
-    // without pressure (the Jacobi sweeps' measure) plus the pressure where the fluid has
-    // no compression to hold (which the sweeps, rising from below, never leave; CG, which
-    // may overshoot, must be held to it: counting compression alone left a resting tank's
-    // bottom pressure 16 % high).
+    // without pressure (the Jacobi sweeps' measure) plus the expansion left under pressure,
+    // which CG may overshoot into and the sweeps, rising from below, hardly leave.
     auto error = [&]() {
         return deterministicSum(n, [&](size_t i) { return std::abs(double(hp * (phi(i) + beta(i)))); }) /
                double(std::max<size_t>(n, 1));
