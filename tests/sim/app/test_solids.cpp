@@ -187,9 +187,13 @@ TEST_CASE("a pool over a cored coil gains no spin: the axisymmetric scene exerts
     // 0.73-0.92 m/s in 0.5 s (issue 51's climb), a coherent spin (mean azimuthal speed about
     // the RMS speed); so did a core whose triangles all leaned one way round the axis (1-7
     // mm/s, up to 44 % of the RMS speed, SolidShapes.cpp). Reference: L_z = 0, bound: a mean
-    // azimuthal speed under 10 % of the RMS speed. Measured with the mirror-symmetric core at
-    // 1,440 / 1,500 / 1,560 / 1,620 particles: 0.09 / 0.24 / 2.5 / 2.9 % (either sign: the
-    // flow's own symmetry breaking, chaotic in the particle count).
+    // azimuthal speed under 10 % of the RMS speed, both averaged over the five frames of the
+    // quarter second: the coil pulls the fluid in pulses, and the RMS speed at one instant
+    // swings from 11 to 79 mm/s with the moment a pulse is caught (at 0.25 s, over runs that
+    // differ only in the particle count or in when the neighbour search re-sorts), while the
+    // mean azimuthal speed stays within 2 mm/s of zero either sign; a single frame's ratio read
+    // 18 % at a trough. Measured over the frames with the mirror-symmetric core at 1,500
+    // particles: 3.1 % (2026-12-08, and 3.1 % too with the neighbour search of every step).
     TempDir dir("solids_spin");
     const std::string scene = dir.write("core.toml", pool(R"([[solids]]
 shape = "cylinder"
@@ -205,20 +209,25 @@ length = 0.02
 turns = 500
 current = 4.0
 )"));
-    const CommandResult r = runCommand(kSim + " " + scene + " -o " + dir.file("out") + " -q --set shot.duration=0.25 --set shot.fps=4");
+    const CommandResult r = runCommand(kSim + " " + scene + " -o " + dir.file("out") + " -q --set shot.duration=0.25 --set shot.fps=20");
     INFO(r.output);
     REQUIRE(r.code == kExitOk);
-    const ParticleTable t = readParticleFile(dir.file("out/particles_0001.ply"));
-    const std::vector<Vec3> x = t.vec3("x", "y", "z"), v = t.vec3("vx", "vy", "vz");
-    double swirl = 0, fastest = 0, rms = 0;
-    for (size_t i = 0; i < x.size(); ++i) {
-        const double r = std::hypot(double(x[i].x()), double(x[i].y()));
-        if (r > 0) swirl += (double(x[i].x()) * v[i].y() - double(x[i].y()) * v[i].x()) / r / double(x.size());
-        fastest = std::max(fastest, double(v[i].norm()));
-        rms += double(v[i].squaredNorm()) / double(x.size());
+    constexpr int kFrames = 5;
+    double swirl = 0, fastest = 0, rms = 0;   // swirl: the frames' mean |mean azimuthal speed|
+    for (int f = 1; f <= kFrames; ++f) {
+        const ParticleTable t = readParticleFile(dir.file("out/particles_000" + std::to_string(f) + ".ply"));
+        const std::vector<Vec3> x = t.vec3("x", "y", "z"), v = t.vec3("vx", "vy", "vz");
+        double azimuthal = 0, square = 0;
+        for (size_t i = 0; i < x.size(); ++i) {
+            const double r = std::hypot(double(x[i].x()), double(x[i].y()));
+            if (r > 0) azimuthal += (double(x[i].x()) * v[i].y() - double(x[i].y()) * v[i].x()) / r / double(x.size());
+            fastest = std::max(fastest, double(v[i].norm()));
+            square += double(v[i].squaredNorm()) / double(x.size());
+        }
+        swirl += std::abs(azimuthal) / kFrames;
+        rms += std::sqrt(square) / kFrames;
     }
-    rms = std::sqrt(rms);
-    WARN("mean azimuthal speed " << swirl << " m/s, fastest particle " << fastest << " m/s, RMS speed " << rms << " m/s");
+    WARN("mean azimuthal speed " << swirl << " m/s, fastest particle " << fastest << " m/s, RMS speed " << rms << " m/s (means over the frames)");
     CHECK(fastest > 0.05); // the coil pulls hard: the fluid moves
     CHECK(std::abs(swirl) < 0.1 * rms);
 }
