@@ -88,7 +88,7 @@ ReturnToService=2
 SchedulerType=sched/backfill
 # The main and the backfill scheduler every second (defaults 60 s and 30 s), at most every
 # 0.1 s on events: a frame task whose frame is published starts within a second. The suite's
-# Slurm test ran 60 s alone with sched_interval=2 alone, 50 s with these (2026-12-08).
+# Slurm test, run alone: 60 s with sched_interval=2 only, 50 s with these (2026-12-08).
 SchedulerParameters=sched_interval=1,bf_interval=1,sched_min_interval=100000
 SelectType=select/cons_tres
 SelectTypeParameters=CR_CPU_Memory
