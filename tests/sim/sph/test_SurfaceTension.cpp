@@ -12,6 +12,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <random>
 #include <utility>
 #include <vector>
 
@@ -130,7 +131,12 @@ struct Oscillation {
     double q0;                  ///< the start's quadrupole
 };
 
-Oscillation oscillateDroplet(const char* model) {
+/// seed > 0: every particle of the start moved by up to 1e-3 spacing along each axis
+/// (uniform, mt19937(seed)). The lattice start's symmetry makes the oscillation depend on the
+/// rounding of the sums: jittered by 1e-6 spacing with four seeds, csf's second zero fell at
+/// 0.128-0.269 s; by 1e-3 spacing at 0.123-0.131 s (docs/physics/sph-solver.md, "A Verlet skin
+/// for DFSPH").
+Oscillation oscillateDroplet(const char* model, unsigned seed = 0) {
     const double s = 0.001, sigma = 0.07, rho0 = 1000, eps = 0.1;
     SimScene scene;
     scene.path = "rayleigh";
@@ -163,6 +169,12 @@ Oscillation oscillateDroplet(const char* model) {
     std::stable_sort(lattice.begin(), lattice.end(), [](const auto& l, const auto& r) { return l.first < r.first; });
     std::vector<Vec3> x(n), v(n, Vec3::Zero());
     for (size_t i = 0; i < n; ++i) x[i] = lattice[i].second;
+    if (seed > 0) {
+        std::mt19937 rng(seed);
+        std::uniform_real_distribution<double> jitter(-1e-3 * s, 1e-3 * s);
+        for (Vec3& p : x)
+            for (int a = 0; a < 3; ++a) p[a] += Real(jitter(rng));
+    }
     sim.setState(0, x, v, {});
 
     const double R = std::cbrt(double(n) * sim.particleVolume() * 3 / (4 * kPi));
@@ -198,10 +210,22 @@ TEST_CASE("a droplet's l = 2 oscillation has Rayleigh's period 2 pi sqrt(rho R^3
 }
 
 // The "csf" model (sim/sph/forces/CurvatureTension.hpp) on the same droplet (R = 6.8 spacings,
-// 1331 particles, Rayleigh's T = 0.150 s): first zero at 1.16 T/4, a period of 1.07 T
-// (Akinci's: 4.5 T/4 and 4.1 T).
+// 1331 particles, Rayleigh's T = 0.150 s), the zeros averaged over four starts jittered by
+// 1e-3 spacing (seeds 1-4): the lattice start alone passed or failed on the rounding of its
+// sums (oscillateDroplet). Measured 2026-12-08: first zero at 1.17 T/4, a period of 1.11 T
+// (the four starts: 1.06-1.14 T; Akinci's on the lattice start: 4.5 T/4 and 4.1 T).
 TEST_CASE("csf tension: a droplet's l = 2 oscillation has Rayleigh's period", "[sph][tension]") {
-    checkRayleigh(oscillateDroplet("csf"), 0.25, 0.15);
+    constexpr unsigned kStarts = 4;
+    Oscillation mean{0, {0, 0}, 0};
+    for (unsigned seed = 1; seed <= kStarts; ++seed) {
+        const Oscillation o = oscillateDroplet("csf", seed);
+        CAPTURE(seed, o.zeros);
+        REQUIRE(o.zeros.size() == 2);
+        mean.period = o.period;
+        mean.q0 += o.q0 / kStarts;
+        for (int z = 0; z < 2; ++z) mean.zeros[size_t(z)] += o.zeros[size_t(z)] / kStarts;
+    }
+    checkRayleigh(mean, 0.25, 0.15);
 }
 
 namespace {
