@@ -6,6 +6,7 @@
 #include <tbb/parallel_for.h>
 #include <tbb/parallel_reduce.h>
 
+#include <algorithm>
 #include <cstddef>
 #include <cstdint>
 #include <vector>
@@ -39,6 +40,31 @@ double deterministicSum(size_t n, F&& f) {
             return acc;
         },
         [](double a, double b) { return a + b; });
+}
+
+/// Largest f(i) over [0, n) as a T, `none` when n = 0. A maximum is exact in any order, so
+/// the result does not depend on the thread count either.
+template <class T, class F>
+T largestOf(size_t n, T none, F&& f) {
+    return tbb::parallel_reduce(
+        tbb::blocked_range<size_t>(0, n, 4096), none,
+        [&](const tbb::blocked_range<size_t>& r, T m) {
+            for (size_t i = r.begin(); i != r.end(); ++i) m = std::max(m, T(f(i)));
+            return m;
+        },
+        [](T a, T b) { return std::max(a, b); });
+}
+
+/// Smallest f(i) over [0, n) as a T, `none` when n = 0 (exact in any order, as largestOf).
+template <class T, class F>
+T smallestOf(size_t n, T none, F&& f) {
+    return tbb::parallel_reduce(
+        tbb::blocked_range<size_t>(0, n, 4096), none,
+        [&](const tbb::blocked_range<size_t>& r, T m) {
+            for (size_t i = r.begin(); i != r.end(); ++i) m = std::min(m, T(f(i)));
+            return m;
+        },
+        [](T a, T b) { return std::min(a, b); });
 }
 
 /// Reorders `data` so that data[k] = old data[order[k]]; leaves data of another size alone.

@@ -318,9 +318,8 @@ int DfsphSolver::conjugateGradient(std::vector<Real>& kappa, const std::vector<R
             if (!(pAp > 0)) break;
             const double stepCg = dot(g, p) / pAp;
             // The longest step that keeps k >= 0 (k - step p).
-            double stepMax = 1e300;
-            for (size_t i = 0; i < n; ++i)
-                if (p[i] > 0) stepMax = std::min(stepMax, double(kappa[i]) / double(p[i]));
+            const double stepMax =
+                smallestOf(n, 1e300, [&](size_t i) { return p[i] > 0 ? double(kappa[i]) / double(p[i]) : 1e300; });
             if (stepCg <= stepMax) {
                 const Real a = Real(stepCg);
                 forEachParticle(n, [&](size_t i) {

@@ -5,10 +5,6 @@
 #include "sim/core/ParticleLoops.hpp"
 #include "sim/sph/Kernel.hpp"
 
-#include <tbb/blocked_range.h>
-#include <tbb/parallel_for.h>
-#include <tbb/parallel_reduce.h>
-
 #include <algorithm>
 #include <cmath>
 #include <limits>
@@ -251,13 +247,7 @@ void FluidMagnetics::update(double t, const std::vector<Vec3>& x, const SurfaceP
     applied();
     ++stats_.steps;
     auto largest = [&](const std::vector<Vec3>& field) {
-        return std::sqrt(double(tbb::parallel_reduce(
-            tbb::blocked_range<size_t>(0, field.size(), 4096), Real(0),
-            [&](const tbb::blocked_range<size_t>& r, Real m) {
-                for (size_t i = r.begin(); i != r.end(); ++i) m = std::max(m, field[i].squaredNorm());
-                return m;
-            },
-            [](Real a, Real b) { return std::max(a, b); })));
+        return std::sqrt(double(largestOf(field.size(), Real(0), [&](size_t i) { return field[i].squaredNorm(); })));
     };
     if (!magnetic()) {
         maxFieldSeen_ = std::max(maxFieldSeen_, largest(Hext_));
@@ -312,13 +302,7 @@ void FluidMagnetics::computeKelvin(const std::vector<Vec3>& x, const std::functi
         computeSurfacePressure(x, *view.colorGradient, *view.exposure);
     else
         computeBodyForce(x);
-    maxAcceleration_ = std::sqrt(double(tbb::parallel_reduce(
-        tbb::blocked_range<size_t>(0, n, 4096), Real(0),
-        [&](const tbb::blocked_range<size_t>& r, Real m) {
-            for (size_t i = r.begin(); i != r.end(); ++i) m = std::max(m, kelvin_[i].squaredNorm());
-            return m;
-        },
-        [](Real a, Real b) { return std::max(a, b); })));
+    maxAcceleration_ = std::sqrt(double(largestOf(n, Real(0), [&](size_t i) { return kelvin_[i].squaredNorm(); })));
 }
 
 void FluidMagnetics::computeBodyForce(const std::vector<Vec3>& x) {

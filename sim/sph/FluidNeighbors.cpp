@@ -10,7 +10,6 @@
 
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
-#include <tbb/parallel_reduce.h>
 
 #include <algorithm>
 #include <atomic>
@@ -34,13 +33,7 @@ void FluidSimulation::refreshNeighbors(bool forceSearch) {
     // moved less than half the skin since the search are still in each other's slots.
     bool search = forceSearch || skin_ <= 0 || xSearch_.size() != x_.size();
     if (!search) {
-        const Real moved2 = tbb::parallel_reduce(
-            tbb::blocked_range<size_t>(0, x_.size(), 4096), Real(0),
-            [&](const tbb::blocked_range<size_t>& r, Real m) {
-                for (size_t i = r.begin(); i != r.end(); ++i) m = std::max(m, (x_[i] - xSearch_[i]).squaredNorm());
-                return m;
-            },
-            [](Real a, Real b) { return std::max(a, b); });
+        const Real moved2 = largestOf(x_.size(), Real(0), [&](size_t i) { return (x_[i] - xSearch_[i]).squaredNorm(); });
         // (A non-finite position never gets here: integratePositions stops the run.)
         search = !(4 * double(moved2) < skin_ * skin_);
     }

@@ -304,13 +304,7 @@ FluidSimulation::~FluidSimulation() = default;
 
 double FluidSimulation::maxSpeed(size_t* which) const {
     const size_t n = x_.size();
-    const Real vmax = tbb::parallel_reduce(
-        tbb::blocked_range<size_t>(0, n, 4096), Real(0),
-        [&](const tbb::blocked_range<size_t>& r, Real m) {
-            for (size_t i = r.begin(); i != r.end(); ++i) m = std::max(m, v_[i].squaredNorm());
-            return m;
-        },
-        [](Real a, Real b) { return std::max(a, b); });
+    const Real vmax = largestOf(n, Real(0), [&](size_t i) { return v_[i].squaredNorm(); });
     if (which) {
         *which = 0;
         for (size_t i = 0; i < n; ++i)
